@@ -1,0 +1,213 @@
+//! The one configuration tree. Defaults equal the paper's constants (METHOD.md); a TOML file lists
+//! only what it overrides, and unknown keys are errors.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CatmapError, Result};
+
+/// Everything the mapper can be told. `catmap config` prints the defaults as TOML.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+pub struct MapperConfig {
+    /// Seed of every random choice (keyframe pruning, sampling, initial weights).
+    pub seed: u64,
+    /// How frames are read and handed to the mapper.
+    pub stream: StreamConfig,
+    /// How dataset images are interpreted.
+    pub dataset: DatasetConfig,
+    /// How objects are built from instance masks.
+    pub objects: ObjectConfig,
+    /// Per-object keyframe windows.
+    pub keyframes: KeyframeConfig,
+    /// Live visualisation.
+    pub rerun: RerunConfig,
+}
+
+/// Reader thread and channel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StreamConfig {
+    /// Capacity of the bounded channel between the reader thread and the mapper, in frames.
+    pub channel_capacity: usize,
+    /// Most frames the ingest system takes from the channel per tick.
+    pub frames_per_tick: usize,
+    /// Use every `stride`-th frame of the dataset (1 = all).
+    pub stride: usize,
+    /// Stop after this many frames (after striding); `None` = all.
+    pub max_frames: Option<usize>,
+}
+
+impl Default for StreamConfig {
+    fn default() -> Self {
+        Self { channel_capacity: 8, frames_per_tick: 1, stride: 1, max_frames: None }
+    }
+}
+
+/// Interpretation of dataset images.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DatasetConfig {
+    /// Raw depth units per metre (Replica and ScanNet: millimetres, 1000).
+    pub depth_scale: f32,
+    /// Depth beyond this is treated as invalid, metres.
+    pub max_depth_m: f32,
+}
+
+impl Default for DatasetConfig {
+    fn default() -> Self {
+        Self { depth_scale: 1000.0, max_depth_m: 8.0 }
+    }
+}
+
+/// Object entities built from instance masks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ObjectConfig {
+    /// An instance whose 2D box is at most this many pixels wide or high is ignored in that frame.
+    pub min_box_side_px: u32,
+    /// Growth of the 2D box: each side moves out by half this fraction of the box size (0.2 = 20 % larger).
+    pub box_enlargement: f32,
+    /// Edge of the voxel grid that accumulates each object's observed point cloud, metres.
+    pub cloud_voxel_m: f32,
+    /// Smallest extent of an object's oriented box, metres.
+    pub min_extent_m: f32,
+    /// The oriented box is recomputed when the cloud has grown by more than this fraction since
+    /// the last computation (0.1 = 10 %).
+    pub bounds_refresh_growth: f32,
+    /// Voxel edge used to thin the cloud before fitting the oriented box, metres.
+    pub bounds_voxel_m: f32,
+    /// Only every n-th background pixel in each direction feeds the background cloud.
+    pub background_pixel_stride: u32,
+    /// Voxel edge of the background's observed cloud, metres.
+    pub background_voxel_m: f32,
+}
+
+impl Default for ObjectConfig {
+    fn default() -> Self {
+        Self {
+            min_box_side_px: 10,
+            box_enlargement: 0.2,
+            cloud_voxel_m: 0.01,
+            min_extent_m: 0.10,
+            bounds_refresh_growth: 0.1,
+            bounds_voxel_m: 0.02,
+            background_pixel_stride: 4,
+            background_voxel_m: 0.05,
+        }
+    }
+}
+
+/// Per-object keyframe windows (vMAP's policy).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct KeyframeConfig {
+    /// Frames kept per object, including the live one. Must be >= 3.
+    pub capacity: usize,
+    /// An object's n-th visible frame is a keyframe when n is a multiple of this.
+    pub object_stride: u32,
+    /// The same for the background.
+    pub background_stride: u32,
+}
+
+impl Default for KeyframeConfig {
+    fn default() -> Self {
+        Self { capacity: 20, object_stride: 25, background_stride: 50 }
+    }
+}
+
+/// Rerun logging.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RerunConfig {
+    /// Images are logged at 1/`image_downscale` of their size (1 = full size).
+    pub image_downscale: u32,
+    /// Log images every this many frames (points and boxes are logged every frame).
+    pub image_every: u32,
+    /// JPEG quality of logged colour images, 1–100.
+    pub jpeg_quality: u8,
+    /// At most this many points per object cloud are logged (evenly thinned).
+    pub max_points_per_object: usize,
+    /// An object's cloud is logged again once it has grown by this fraction (0.25 = 25 %).
+    pub cloud_log_growth: f32,
+}
+
+impl Default for RerunConfig {
+    fn default() -> Self {
+        Self { image_downscale: 2, image_every: 1, jpeg_quality: 80, max_points_per_object: 8_000, cloud_log_growth: 0.25 }
+    }
+}
+
+impl MapperConfig {
+    /// Parses a TOML file's text; unknown keys and wrong types are errors.
+    pub fn from_toml(text: &str) -> Result<Self> {
+        let config: Self = toml::from_str(text).map_err(|e| CatmapError::Config(e.to_string()))?;
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// The configuration as TOML, every field present.
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).expect("the config tree has only TOML-representable fields")
+    }
+
+    /// Checks values that serde cannot.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |msg: &str| Err(CatmapError::Config(msg.to_owned()));
+        if self.stream.channel_capacity == 0 {
+            return bad("stream.channel_capacity must be at least 1");
+        }
+        if self.stream.frames_per_tick == 0 {
+            return bad("stream.frames_per_tick must be at least 1");
+        }
+        if self.stream.stride == 0 {
+            return bad("stream.stride must be at least 1");
+        }
+        if !(self.dataset.depth_scale > 0.0) {
+            return bad("dataset.depth_scale must be positive");
+        }
+        if self.keyframes.capacity < 3 {
+            return bad("keyframes.capacity must be at least 3");
+        }
+        if self.keyframes.object_stride == 0 || self.keyframes.background_stride == 0 {
+            return bad("keyframe strides must be at least 1");
+        }
+        if !(self.objects.cloud_voxel_m > 0.0 && self.objects.bounds_voxel_m > 0.0 && self.objects.background_voxel_m > 0.0) {
+            return bad("voxel sizes must be positive");
+        }
+        if self.rerun.image_downscale == 0 || self.rerun.image_every == 0 {
+            return bad("rerun.image_downscale and rerun.image_every must be at least 1");
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_config_file_may_list_only_overrides() {
+        let config = MapperConfig::from_toml("seed = 7\n[keyframes]\nobject_stride = 5\n").expect("valid");
+        assert_eq!(config.seed, 7);
+        assert_eq!(config.keyframes.object_stride, 5);
+        assert_eq!(config.keyframes.capacity, 20, "untouched fields keep the paper's default");
+    }
+
+    #[test]
+    fn unknown_keys_are_rejected_with_their_name() {
+        let err = MapperConfig::from_toml("[keyframes]\nstrid = 5\n").expect_err("typo must fail");
+        assert!(err.to_string().contains("strid"), "error names the key: {err}");
+    }
+
+    #[test]
+    fn printed_defaults_parse_back_to_the_defaults() {
+        let text = MapperConfig::default().to_toml();
+        assert_eq!(MapperConfig::from_toml(&text).expect("round trip"), MapperConfig::default());
+    }
+
+    #[test]
+    fn zero_channel_capacity_is_rejected() {
+        let err = MapperConfig::from_toml("[stream]\nchannel_capacity = 0\n").expect_err("must fail");
+        assert!(err.to_string().contains("channel_capacity"));
+    }
+}

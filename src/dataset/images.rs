@@ -1,0 +1,328 @@
+//! Dataset image files: finding numbered files, decoding PNG/JPEG into flat pixel buffers, and the
+//! resampling the readers need (nearest and bilinear resize, border crop).
+//!
+//! Decoders write straight into the returned buffer (one allocation per image, none per pixel).
+//! The `*_from_bytes` functions are pure; the `read_*` wrappers only add the file read. Every error
+//! names the file and the reason.
+
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+use image::{ColorType, ImageDecoder, ImageReader};
+use rayon::prelude::*;
+
+use crate::error::{CatmapError, Result};
+
+/// Largest image this module decodes (8192 × 8192): guards allocations against corrupt headers.
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// A row-major image: pixel `(u, v)` is `pixels[v * width + u]`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Image<T> {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width × height` pixels, row-major.
+    pub pixels: Vec<T>,
+}
+
+impl<T: Copy> Image<T> {
+    /// `(width, height)`.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The image without a `border`-pixel frame on every side; `None` when the border leaves no pixel.
+    pub fn crop_border(&self, border: u32) -> Option<Image<T>> {
+        let width = self.width.checked_sub(border.checked_mul(2)?).filter(|&w| w > 0)?;
+        let height = self.height.checked_sub(border * 2).filter(|&h| h > 0)?;
+        let (w, b) = (self.width as usize, border as usize);
+        let mut pixels = Vec::with_capacity(width as usize * height as usize);
+        for row in self.pixels.chunks_exact(w).skip(b).take(height as usize) {
+            pixels.extend_from_slice(row.get(b..b + width as usize)?);
+        }
+        (pixels.len() == width as usize * height as usize).then_some(Image { width, height, pixels })
+    }
+}
+
+/// Renders `(width, height)` as `W×H` for messages.
+pub fn size_text((width, height): (u32, u32)) -> String {
+    format!("{width}×{height}")
+}
+
+/// Files in `dir` named `{prefix}{n}{suffix}` with `n` a decimal integer, sorted by `n` (so `2`
+/// comes before `10`). Other names are skipped with one warning per folder.
+pub fn numbered_files(dir: &Path, prefix: &str, suffix: &str) -> Result<Vec<(u64, PathBuf)>> {
+    let entries = std::fs::read_dir(dir).map_err(|e| CatmapError::io(dir, e))?;
+    let mut files = Vec::new();
+    let mut skipped: Vec<String> = Vec::new();
+    for entry in entries {
+        let entry = entry.map_err(|e| CatmapError::io(dir, e))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let number = name.strip_prefix(prefix).and_then(|rest| rest.strip_suffix(suffix));
+        match number.filter(|n| n.bytes().all(|b| b.is_ascii_digit())).and_then(|n| n.parse().ok()) {
+            Some(n) => files.push((n, entry.path())),
+            None => skipped.push(name),
+        }
+    }
+    if !skipped.is_empty() {
+        skipped.sort();
+        tracing::warn!(
+            folder = %dir.display(),
+            count = skipped.len(),
+            first = %skipped[0],
+            "skipping files not named {prefix}<number>{suffix}"
+        );
+    }
+    files.sort();
+    Ok(files)
+}
+
+fn image_error(path: &Path, reason: impl std::fmt::Display) -> CatmapError {
+    CatmapError::Image { path: path.to_path_buf(), reason: reason.to_string() }
+}
+
+fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|e| CatmapError::io(path, e))
+}
+
+/// Opens a decoder on `bytes` (format guessed from the content) and checks the size is sane.
+fn decoder_of<'a>(bytes: &'a [u8], path: &Path) -> Result<(impl ImageDecoder + 'a, usize)> {
+    let reader = ImageReader::new(Cursor::new(bytes)).with_guessed_format().map_err(|e| image_error(path, e))?;
+    let decoder = reader.into_decoder().map_err(|e| image_error(path, e))?;
+    let (width, height) = decoder.dimensions();
+    let pixel_count = u64::from(width) * u64::from(height);
+    if pixel_count == 0 || pixel_count > MAX_PIXELS {
+        let reason = format!("is {} pixels, expected 1 to {MAX_PIXELS} pixels", size_text((width, height)));
+        return Err(image_error(path, reason));
+    }
+    let pixel_count = usize::try_from(pixel_count).map_err(|e| image_error(path, e))?;
+    Ok((decoder, pixel_count))
+}
+
+/// Decodes an 8- or 16-bit single-channel image into values of `T` (any type holding a `u16`).
+fn grey_as<T: From<u16>>(bytes: &[u8], path: &Path) -> Result<Image<T>> {
+    let (decoder, n) = decoder_of(bytes, path)?;
+    let (width, height) = decoder.dimensions();
+    let pixels = match decoder.color_type() {
+        ColorType::L8 => {
+            let mut raw = vec![0u8; n];
+            decoder.read_image(&mut raw).map_err(|e| image_error(path, e))?;
+            raw.into_iter().map(|v| T::from(u16::from(v))).collect()
+        }
+        ColorType::L16 => {
+            // The decoder returns 16-bit samples in native byte order.
+            let mut raw = vec![[0u8; 2]; n];
+            decoder.read_image(raw.as_flattened_mut()).map_err(|e| image_error(path, e))?;
+            raw.into_iter().map(|b| T::from(u16::from_ne_bytes(b))).collect()
+        }
+        other => {
+            let reason = format!("expected an 8- or 16-bit single-channel image, found {other:?}");
+            return Err(image_error(path, reason));
+        }
+    };
+    Ok(Image { width, height, pixels })
+}
+
+/// Decodes an 8- or 16-bit single-channel image into unsigned values (class or instance ids).
+pub fn grey_from_bytes(bytes: &[u8], path: &Path) -> Result<Image<u32>> {
+    grey_as(bytes, path)
+}
+
+/// Decodes an 8- or 16-bit single-channel image into `u16` values (raw depth).
+pub fn grey16_from_bytes(bytes: &[u8], path: &Path) -> Result<Image<u16>> {
+    grey_as(bytes, path)
+}
+
+/// Decodes an 8-bit RGB image (PNG or JPEG); RGBA drops alpha, grey is replicated to RGB.
+pub fn rgb_from_bytes(bytes: &[u8], path: &Path) -> Result<Image<[u8; 3]>> {
+    let (decoder, n) = decoder_of(bytes, path)?;
+    let (width, height) = decoder.dimensions();
+    let pixels = match decoder.color_type() {
+        ColorType::Rgb8 => {
+            let mut rgb = vec![[0u8; 3]; n];
+            decoder.read_image(rgb.as_flattened_mut()).map_err(|e| image_error(path, e))?;
+            rgb
+        }
+        ColorType::Rgba8 => {
+            let mut rgba = vec![[0u8; 4]; n];
+            decoder.read_image(rgba.as_flattened_mut()).map_err(|e| image_error(path, e))?;
+            rgba.into_iter().map(|[r, g, b, _]| [r, g, b]).collect()
+        }
+        ColorType::L8 => {
+            let mut grey = vec![0u8; n];
+            decoder.read_image(&mut grey).map_err(|e| image_error(path, e))?;
+            grey.into_iter().map(|l| [l; 3]).collect()
+        }
+        other => {
+            return Err(image_error(path, format!("expected an 8-bit RGB or RGBA image, found {other:?}")));
+        }
+    };
+    Ok(Image { width, height, pixels })
+}
+
+/// Reads and decodes a single-channel image file into `u32` values.
+pub fn read_grey(path: &Path) -> Result<Image<u32>> {
+    grey_from_bytes(&read_bytes(path)?, path)
+}
+
+/// Reads and decodes a single-channel image file into `u16` values.
+pub fn read_grey16(path: &Path) -> Result<Image<u16>> {
+    grey16_from_bytes(&read_bytes(path)?, path)
+}
+
+/// Reads and decodes an RGB(A) image file.
+pub fn read_rgb(path: &Path) -> Result<Image<[u8; 3]>> {
+    rgb_from_bytes(&read_bytes(path)?, path)
+}
+
+/// Width and height of an image file, reading only its header.
+pub fn read_size(path: &Path) -> Result<(u32, u32)> {
+    let reader = ImageReader::open(path).map_err(|e| CatmapError::io(path, e))?;
+    let reader = reader.with_guessed_format().map_err(|e| image_error(path, e))?;
+    reader.into_dimensions().map_err(|e| image_error(path, e))
+}
+
+/// Fails unless `image` is `expected` in size; `what` completes "… but {what} is W×H".
+pub fn require_size<T: Copy>(image: &Image<T>, expected: (u32, u32), path: &Path, what: &str) -> Result<()> {
+    if image.size() == expected {
+        return Ok(());
+    }
+    let reason = format!("is {} pixels, but {what} is {}", size_text(image.size()), size_text(expected));
+    Err(image_error(path, reason))
+}
+
+/// Checks depth-conversion options: a positive finite scale and a positive maximum depth.
+pub fn check_depth_options(depth_scale: f32, max_depth_m: f32) -> Result<()> {
+    if !depth_scale.is_finite() || depth_scale <= 0.0 {
+        return Err(CatmapError::Config(format!("depth_scale must be positive and finite, got {depth_scale}")));
+    }
+    if max_depth_m.is_nan() || max_depth_m <= 0.0 {
+        return Err(CatmapError::Config(format!("max_depth_m must be positive, got {max_depth_m}")));
+    }
+    Ok(())
+}
+
+/// Raw depth to metres: `raw / depth_scale`; 0 stays 0 (invalid) and depth beyond `max_depth_m`
+/// becomes 0 (invalid), as vMAP's `DepthFilter` does.
+pub fn depth_m_from_raw(raw: &[u16], depth_scale: f32, max_depth_m: f32) -> Vec<f32> {
+    raw.iter()
+        .map(|&value| {
+            let depth_m = f32::from(value) / depth_scale;
+            if depth_m > max_depth_m { 0.0 } else { depth_m }
+        })
+        .collect()
+}
+
+/// Nearest-neighbour resize (OpenCV `INTER_NEAREST`: source pixel `floor(x · src / dst)`), for labels.
+pub fn resize_nearest<T: Copy + Default>(src: Image<T>, width: u32, height: u32) -> Image<T> {
+    if src.size() == (width, height) || src.pixels.is_empty() {
+        return src;
+    }
+    let (sw, sh) = (src.width as usize, src.height as usize);
+    let columns: Vec<usize> = (0..width as usize).map(|x| (x * sw / width as usize).min(sw - 1)).collect();
+    let mut pixels = Vec::with_capacity(width as usize * height as usize);
+    for y in 0..height as usize {
+        let sy = (y * sh / height as usize).min(sh - 1);
+        let row = src.pixels.get(sy * sw..(sy + 1) * sw).unwrap_or_default();
+        pixels.extend(columns.iter().map(|&sx| row.get(sx).copied().unwrap_or_default()));
+    }
+    Image { width, height, pixels }
+}
+
+/// Fixed-point precision of bilinear weights (OpenCV's `INTER_RESIZE_COEF_BITS`).
+const WEIGHT_BITS: u32 = 11;
+const WEIGHT_ONE: u32 = 1 << WEIGHT_BITS;
+
+/// Source taps of bilinear resampling along one axis (OpenCV `INTER_LINEAR` convention:
+/// `s = (d + 0.5) · src / dst − 0.5`, clamped at the edges): `(i0, i1, weight of i1)`, with the
+/// weight in units of `1 / WEIGHT_ONE`.
+fn bilinear_taps(src_len: usize, dst_len: usize) -> Vec<(usize, usize, u32)> {
+    let scale = src_len as f64 / dst_len as f64;
+    (0..dst_len)
+        .map(|d| {
+            let s = ((d as f64 + 0.5) * scale - 0.5).max(0.0);
+            let i = s.floor() as usize;
+            if i + 1 >= src_len {
+                (src_len - 1, src_len - 1, 0)
+            } else {
+                (i, i + 1, ((s - i as f64) * f64::from(WEIGHT_ONE)).round() as u32)
+            }
+        })
+        .collect()
+}
+
+/// Bilinear resize of an RGB image (OpenCV `INTER_LINEAR`, 11-bit fixed-point weights), as vMAP
+/// resizes ScanNet colour. Rows are computed in parallel.
+pub fn resize_bilinear_rgb(src: Image<[u8; 3]>, width: u32, height: u32) -> Image<[u8; 3]> {
+    if src.size() == (width, height) || src.pixels.is_empty() || width == 0 || height == 0 {
+        return src;
+    }
+    let sw = src.width as usize;
+    let columns = bilinear_taps(sw, width as usize);
+    let rows = bilinear_taps(src.height as usize, height as usize);
+    let mut pixels = vec![[0u8; 3]; width as usize * height as usize];
+    pixels.par_chunks_mut(width as usize).zip(&rows).for_each(|(out, &(y0, y1, wy))| {
+        let (Some(top), Some(bottom)) = (src.pixels.get(y0 * sw..(y0 + 1) * sw), src.pixels.get(y1 * sw..(y1 + 1) * sw))
+        else {
+            return;
+        };
+        for (o, &(x0, x1, wx)) in out.iter_mut().zip(&columns) {
+            let (a, b, c, d) = (top[x0], top[x1], bottom[x0], bottom[x1]);
+            *o = std::array::from_fn(|k| {
+                let upper = u32::from(a[k]) * (WEIGHT_ONE - wx) + u32::from(b[k]) * wx;
+                let lower = u32::from(c[k]) * (WEIGHT_ONE - wx) + u32::from(d[k]) * wx;
+                let sum = upper * (WEIGHT_ONE - wy) + lower * wy;
+                ((sum + (1 << (2 * WEIGHT_BITS - 1))) >> (2 * WEIGHT_BITS)) as u8
+            });
+        }
+    });
+    Image { width, height, pixels }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp(width: u32, height: u32) -> Image<u32> {
+        Image { width, height, pixels: (0..width * height).collect() }
+    }
+
+    #[test]
+    fn crop_border_removes_a_frame_on_every_side() {
+        let cropped = ramp(5, 4).crop_border(1).expect("3×2 remain");
+        assert_eq!(cropped.size(), (3, 2));
+        assert_eq!(cropped.pixels, [6, 7, 8, 11, 12, 13]);
+        assert_eq!(ramp(4, 4).crop_border(2), None, "a border of half the side leaves nothing");
+    }
+
+    #[test]
+    fn nearest_resize_picks_floor_of_scaled_coordinate() {
+        let half = resize_nearest(ramp(4, 2), 2, 1);
+        assert_eq!(half.pixels, [0, 2]);
+    }
+
+    #[test]
+    fn bilinear_resize_by_two_averages_pixel_pairs() {
+        let src = Image { width: 4, height: 1, pixels: vec![[0; 3], [100; 3], [200; 3], [250; 3]] };
+        let half = resize_bilinear_rgb(src, 2, 1);
+        assert_eq!(half.pixels, [[50; 3], [225; 3]], "OpenCV samples at x = 0.5 and 2.5");
+    }
+
+    #[test]
+    fn sixteen_bit_png_round_trips() {
+        let values: Vec<u16> = vec![0, 1, 1000, 65535, 300, 7];
+        let png = image::ImageBuffer::<image::Luma<u16>, _>::from_raw(3, 2, values.clone()).expect("3×2");
+        let mut bytes = Vec::new();
+        png.write_to(&mut Cursor::new(&mut bytes), image::ImageFormat::Png).expect("encode");
+        let decoded = grey16_from_bytes(&bytes, Path::new("x.png")).expect("decode");
+        assert_eq!(decoded.pixels, values);
+    }
+
+    #[test]
+    fn random_bytes_are_an_image_error_naming_the_file() {
+        let err = grey_from_bytes(&[0x13, 0x37, 0, 1, 2, 3, 4, 5], Path::new("bad.png")).expect_err("not an image");
+        assert!(err.to_string().contains("bad.png: bad image:"), "{err}");
+    }
+}

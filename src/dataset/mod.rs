@@ -1,0 +1,48 @@
+//! Datasets as random-access frame sources: the Replica (vMAP layout) and ScanNet readers, and the
+//! built-in synthetic scenes, all behind [`FrameSource`].
+
+pub mod camera_spec;
+pub mod images;
+pub mod replica;
+pub mod scannet;
+
+use crate::error::Result;
+use crate::frame::{CameraIntrinsics, RgbdFrame};
+use crate::ids::FrameIndex;
+
+/// A sequence of posed RGB-D frames that can be decoded in any order, from any thread.
+pub trait FrameSource: Send + Sync {
+    /// Number of frames in the sequence.
+    fn len(&self) -> usize;
+    /// True when the sequence has no frames.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Intrinsics shared by all frames.
+    fn intrinsics(&self) -> CameraIntrinsics;
+    /// Decodes frame `position` (0-based, < `len()`). The returned frame's `index` is its
+    /// position in the dataset. Errors name the file and the reason.
+    fn read_frame(&self, position: usize) -> Result<RgbdFrame>;
+    /// Human-readable name for logs (usually the folder).
+    fn name(&self) -> String;
+}
+
+impl<T: FrameSource + ?Sized> FrameSource for Box<T> {
+    fn len(&self) -> usize {
+        (**self).len()
+    }
+    fn intrinsics(&self) -> CameraIntrinsics {
+        (**self).intrinsics()
+    }
+    fn read_frame(&self, position: usize) -> Result<RgbdFrame> {
+        (**self).read_frame(position)
+    }
+    fn name(&self) -> String {
+        (**self).name()
+    }
+}
+
+/// Converts a dataset position into the frame index stored on frames.
+pub fn frame_index(position: usize) -> FrameIndex {
+    FrameIndex(position as u64)
+}

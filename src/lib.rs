@@ -1,0 +1,30 @@
+//! catmap: object-level RGB-D mapping with category-level neural fields.
+//!
+//! This crate holds data types and pure algorithms (geometry, readers, synthetic scenes); the
+//! streaming mapper that wires them into `bevy_ecs` systems lives in `catmap-systems`.
+
+pub mod classes;
+pub mod config;
+pub mod dataset;
+pub mod error;
+pub mod frame;
+pub mod ids;
+
+pub use config::MapperConfig;
+pub use error::{CatmapError, Result};
+pub use frame::{CameraIntrinsics, InstanceLabel, InstanceMask, RgbdFrame, SharedFrame};
+pub use ids::{ClassId, FrameIndex, ObjectId};
+pub mod frame_observation;
+pub mod keyframes;
+pub mod observed_cloud;
+pub mod oriented_box;
+pub mod pixel_box;
+pub mod stream;
+pub mod object_bounds;
+pub mod rng;
+pub mod image_ops;
+pub mod atomic_file;
+pub mod object_view;
+pub mod mesh;
+pub mod synth;
+pub mod nearest;

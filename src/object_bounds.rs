@@ -1,0 +1,56 @@
+//! When and how an object's oriented box is (re)fitted from its observed cloud.
+
+use crate::config::ObjectConfig;
+use crate::error::{CatmapError, Result};
+use crate::observed_cloud::{ObservedCloud, voxel_downsample};
+use crate::oriented_box::{OrientedBox, fit_minimum_volume_box};
+
+/// Fewest cloud voxels an object needs before it gets a box.
+pub const MIN_POINTS_FOR_BOX: usize = 10;
+
+/// Whether a box fitted at `fitted_at` voxels is stale now that the cloud has `current` voxels.
+pub fn box_is_stale(fitted_at: Option<usize>, current: usize, growth: f32) -> bool {
+    match fitted_at {
+        None => current >= MIN_POINTS_FOR_BOX,
+        Some(n) => current as f64 > n as f64 * (1.0 + f64::from(growth)),
+    }
+}
+
+/// The minimum-volume box of the cloud, thinned to `bounds_voxel_m`, every edge ≥ `min_extent_m`.
+pub fn fit_object_box(cloud: &ObservedCloud, cfg: &ObjectConfig) -> Result<OrientedBox> {
+    if cloud.len() < MIN_POINTS_FOR_BOX {
+        return Err(CatmapError::Degenerate(format!(
+            "{} observed points, at least {MIN_POINTS_FOR_BOX} needed for a box",
+            cloud.len()
+        )));
+    }
+    let thinned = voxel_downsample(&cloud.points(), cfg.bounds_voxel_m);
+    Ok(fit_minimum_volume_box(&thinned)?.with_min_extent(cfg.min_extent_m))
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Point3;
+
+    use super::*;
+
+    #[test]
+    fn a_box_goes_stale_only_after_the_configured_growth() {
+        assert!(!box_is_stale(None, 3, 0.1), "too few points for a first box");
+        assert!(box_is_stale(None, 10, 0.1));
+        assert!(!box_is_stale(Some(100), 110, 0.1));
+        assert!(box_is_stale(Some(100), 111, 0.1));
+    }
+
+    #[test]
+    fn a_small_flat_object_gets_the_minimum_extent() {
+        let mut cloud = ObservedCloud::new(0.01);
+        for i in 0..20 {
+            for j in 0..20 {
+                cloud.add_point(&Point3::new(i as f32 * 0.002, j as f32 * 0.002, 0.5));
+            }
+        }
+        let fitted = fit_object_box(&cloud, &ObjectConfig::default()).expect("enough points");
+        assert!(fitted.extents().min() >= 0.1 - 1e-6, "extents {:?}", fitted.extents());
+    }
+}

@@ -1,0 +1,117 @@
+//! The frame stream: a reader thread decodes frames from a [`FrameSource`] and sends them over a
+//! bounded channel, so decoding overlaps mapping and the reader never runs more than
+//! `capacity` frames ahead (the channel applies backpressure; nothing is dropped).
+
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use crossbeam_channel::{Receiver, Sender, bounded};
+
+use crate::dataset::FrameSource;
+use crate::frame::SharedFrame;
+
+/// One message of the stream, in order.
+#[derive(Debug, Clone)]
+pub enum StreamMessage {
+    /// A decoded frame.
+    Frame(SharedFrame),
+    /// A frame that could not be decoded; the stream goes on without it.
+    Skipped {
+        /// Dataset position of the frame.
+        position: usize,
+        /// Why, naming the file.
+        reason: String,
+    },
+    /// The end of the stream.
+    End(StreamStats),
+}
+
+/// What the reader did, sent with [`StreamMessage::End`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StreamStats {
+    /// Frames sent.
+    pub frames_sent: u64,
+    /// Frames skipped because they could not be decoded.
+    pub frames_skipped: u64,
+    /// Time spent decoding.
+    pub decode_time: Duration,
+    /// Time spent blocked on a full channel (the mapper was slower than the reader).
+    pub blocked_time: Duration,
+}
+
+/// Which dataset positions to stream: every `stride`-th, at most `max_frames` of them.
+pub fn stream_positions(len: usize, stride: usize, max_frames: Option<usize>) -> Vec<usize> {
+    (0..len).step_by(stride.max(1)).take(max_frames.unwrap_or(usize::MAX)).collect()
+}
+
+/// A running reader thread and the receiving end of its channel.
+pub struct FrameStream {
+    /// Messages in stream order; the last one is [`StreamMessage::End`].
+    pub receiver: Receiver<StreamMessage>,
+    handle: Option<JoinHandle<()>>,
+}
+
+impl FrameStream {
+    /// Starts a thread that decodes `positions` of `source` in order into a channel of
+    /// `capacity` messages. The thread stops early when the receiver is dropped.
+    pub fn spawn(source: Arc<dyn FrameSource>, positions: Vec<usize>, capacity: usize) -> Self {
+        let (sender, receiver) = bounded(capacity.max(1));
+        let handle = std::thread::Builder::new()
+            .name("catmap-reader".to_owned())
+            .spawn(move || read_into(source.as_ref(), &positions, &sender))
+            .expect("the OS can start one thread");
+        Self { receiver, handle: Some(handle) }
+    }
+
+    /// Waits for the reader thread to finish (after the receiver has seen `End` or was dropped).
+    pub fn join(mut self) {
+        if let Some(handle) = self.handle.take() {
+            let _ = handle.join();
+        }
+    }
+}
+
+/// Decodes `positions` of `source` in order and sends them; ends with `End`.
+/// Returns early if the receiving side hung up.
+pub fn read_into(source: &dyn FrameSource, positions: &[usize], sender: &Sender<StreamMessage>) {
+    let mut stats = StreamStats::default();
+    for &position in positions {
+        let started = Instant::now();
+        let message = match source.read_frame(position) {
+            Ok(frame) => match frame.validate() {
+                Ok(()) => {
+                    stats.frames_sent += 1;
+                    StreamMessage::Frame(Arc::new(frame))
+                }
+                Err(reason) => {
+                    stats.frames_skipped += 1;
+                    StreamMessage::Skipped { position, reason }
+                }
+            },
+            Err(e) => {
+                stats.frames_skipped += 1;
+                StreamMessage::Skipped { position, reason: e.to_string() }
+            }
+        };
+        stats.decode_time += started.elapsed();
+        let waiting = Instant::now();
+        if sender.send(message).is_err() {
+            return;
+        }
+        stats.blocked_time += waiting.elapsed();
+    }
+    let _ = sender.send(StreamMessage::End(stats));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn positions_honour_stride_and_limit() {
+        assert_eq!(stream_positions(10, 3, None), [0, 3, 6, 9]);
+        assert_eq!(stream_positions(10, 2, Some(2)), [0, 2]);
+        assert!(stream_positions(0, 1, None).is_empty());
+    }
+}

@@ -1,0 +1,382 @@
+//! A bounding volume hierarchy over triangles for nearest-hit ray casting.
+//!
+//! Built top-down with the binned surface-area heuristic (12 bins per axis, all three axes): a node
+//! with bounds `B` is split into `L`, `R` minimising `area(L)·|L| + area(R)·|R|`, and stays a leaf
+//! when no split beats `area(B)·|B|` (or it holds ≤ 2 triangles). Nodes are stored depth-first, so a
+//! node's left child follows it and only the right child's index is kept.
+//!
+//! Rays are `origin + t·direction` with an unnormalised direction; `t` is in units of `direction`,
+//! so a camera ray with direction z = 1 in the camera frame reports camera depth directly.
+//! Triangles are intersected with Möller–Trumbore, two-sided.
+
+use nalgebra::{Point3, Vector3};
+
+/// Smallest accepted hit distance, in units of the ray direction (avoids self-hits).
+pub const T_MIN: f32 = 1e-5;
+const BINS: usize = 12;
+const MAX_LEAF_SIZE: usize = 8;
+/// Deepest node level; deeper subtrees become leaves, so the traversal stack cannot overflow.
+const MAX_DEPTH: usize = 60;
+
+/// A ray `origin + t · direction`, `t ≥ 0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ray {
+    /// Start point.
+    pub origin: Point3<f32>,
+    /// Direction; need not be unit length.
+    pub direction: Vector3<f32>,
+}
+
+/// The nearest intersection along a ray.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Index of the triangle in the list the BVH was built from.
+    pub triangle: u32,
+}
+
+/// A triangle prepared for Möller–Trumbore: one corner and the two edges leaving it.
+#[derive(Debug, Clone, Copy)]
+struct PreparedTriangle {
+    v0: Vector3<f32>,
+    e1: Vector3<f32>,
+    e2: Vector3<f32>,
+}
+
+impl PreparedTriangle {
+    fn new([a, b, c]: [Point3<f32>; 3]) -> Self {
+        Self { v0: a.coords, e1: b - a, e2: c - a }
+    }
+
+    /// Ray parameter of the intersection in `(T_MIN, t_max)`, if any.
+    #[inline]
+    fn intersect(&self, origin: &Vector3<f32>, direction: &Vector3<f32>, t_max: f32) -> Option<f32> {
+        let p = direction.cross(&self.e2);
+        let det = self.e1.dot(&p);
+        if det.abs() < 1e-12 {
+            return None;
+        }
+        let inv_det = 1.0 / det;
+        let s = origin - self.v0;
+        let u = s.dot(&p) * inv_det;
+        if !(0.0..=1.0).contains(&u) {
+            return None;
+        }
+        let q = s.cross(&self.e1);
+        let v = direction.dot(&q) * inv_det;
+        if v < 0.0 || u + v > 1.0 {
+            return None;
+        }
+        let t = self.e2.dot(&q) * inv_det;
+        (t > T_MIN && t < t_max).then_some(t)
+    }
+}
+
+/// Axis-aligned box as min/max arrays (cheap to grow and to slab-test).
+#[derive(Debug, Clone, Copy)]
+struct Bounds {
+    min: [f32; 3],
+    max: [f32; 3],
+}
+
+impl Bounds {
+    const EMPTY: Self = Self { min: [f32::INFINITY; 3], max: [f32::NEG_INFINITY; 3] };
+
+    fn grow_point(&mut self, p: &Point3<f32>) {
+        for k in 0..3 {
+            self.min[k] = self.min[k].min(p[k]);
+            self.max[k] = self.max[k].max(p[k]);
+        }
+    }
+
+    fn grow(&mut self, b: &Bounds) {
+        for k in 0..3 {
+            self.min[k] = self.min[k].min(b.min[k]);
+            self.max[k] = self.max[k].max(b.max[k]);
+        }
+    }
+
+    /// Half the surface area (enough for comparing SAH costs); 0 for an empty box.
+    fn half_area(&self) -> f32 {
+        let e = [0, 1, 2].map(|k| (self.max[k] - self.min[k]).max(0.0));
+        e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+    }
+
+    /// Entry distance of the ray into the box if it enters before `t_max`.
+    #[inline]
+    fn entry(&self, origin: &Vector3<f32>, inv_dir: &Vector3<f32>, t_max: f32) -> Option<f32> {
+        let (mut near, mut far) = (T_MIN, t_max);
+        for k in 0..3 {
+            let t0 = (self.min[k] - origin[k]) * inv_dir[k];
+            let t1 = (self.max[k] - origin[k]) * inv_dir[k];
+            near = near.max(t0.min(t1));
+            far = far.min(t0.max(t1));
+        }
+        (near <= far).then_some(near)
+    }
+}
+
+/// A node: a leaf holds `count > 0` triangles from `first`; an interior node (`count == 0`) has
+/// its left child right after it and its right child at `first`.
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    bounds: Bounds,
+    first: u32,
+    count: u32,
+}
+
+/// scratch
+pub static NODES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+/// scratch
+pub static TRIS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+/// scratch
+pub fn node_count(b: &Bvh) -> (usize, usize, usize) { let leaves: Vec<_> = b.nodes.iter().filter(|n| n.count > 0).collect(); (b.nodes.len(), leaves.len(), leaves.iter().map(|n| n.count as usize).max().unwrap_or(0)) }
+
+/// Bounding volume hierarchy over a fixed list of triangles.
+#[derive(Debug, Clone)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    /// Triangles in leaf order.
+    triangles: Vec<PreparedTriangle>,
+    /// Original index of each triangle in leaf order.
+    original: Vec<u32>,
+}
+
+/// Per-triangle data used while building.
+struct BuildItem {
+    bounds: Bounds,
+    centroid: [f32; 3],
+    index: u32,
+}
+
+impl Bvh {
+    /// Builds the hierarchy over `triangles` (corner positions).
+    pub fn build(triangles: &[[Point3<f32>; 3]]) -> Self {
+        let mut items: Vec<BuildItem> = triangles
+            .iter()
+            .enumerate()
+            .map(|(i, tri)| {
+                let mut bounds = Bounds::EMPTY;
+                tri.iter().for_each(|p| bounds.grow_point(p));
+                let centroid = [0, 1, 2].map(|k| (tri[0][k] + tri[1][k] + tri[2][k]) / 3.0);
+                BuildItem { bounds, centroid, index: u32::try_from(i).expect("fewer than 2³² triangles") }
+            })
+            .collect();
+        let mut nodes = Vec::with_capacity(2 * items.len().max(1));
+        build_node(&mut items, 0, 0, &mut nodes);
+        let original: Vec<u32> = items.iter().map(|it| it.index).collect();
+        let triangles = original.iter().map(|&i| PreparedTriangle::new(triangles[i as usize])).collect();
+        Self { nodes, triangles, original }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// True when the BVH holds no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// The nearest hit with `T_MIN < t < t_max`, if any.
+    pub fn nearest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        if self.triangles.is_empty() {
+            return None;
+        }
+        let origin = ray.origin.coords;
+        let inv_dir = ray.direction.map(|d| 1.0 / d);
+        let mut best: Option<(f32, usize)> = None;
+        let mut best_t = t_max;
+        let mut stack = [0_u32; 64];
+        let mut depth = 1;
+        while depth > 0 {
+            NODES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            depth -= 1;
+            let node = &self.nodes[stack[depth] as usize];
+            if node.bounds.entry(&origin, &inv_dir, best_t).is_none() {
+                continue;
+            }
+            if node.count > 0 {
+                let range = node.first as usize..(node.first + node.count) as usize;
+                TRIS.fetch_add(range.len() as u64, std::sync::atomic::Ordering::Relaxed);
+                for i in range {
+                    if let Some(t) = self.triangles[i].intersect(&origin, &ray.direction, best_t) {
+                        best_t = t;
+                        best = Some((t, i));
+                    }
+                }
+                continue;
+            }
+            let left = stack[depth] + 1;
+            let right = node.first;
+            let t_left = self.nodes[left as usize].bounds.entry(&origin, &inv_dir, best_t);
+            let t_right = self.nodes[right as usize].bounds.entry(&origin, &inv_dir, best_t);
+            // Push the farther child first so the nearer one is visited next.
+            let order = match (t_left, t_right) {
+                (Some(l), Some(r)) if r < l => [Some(left), Some(right)],
+                (l, r) => [r.map(|_| right), l.map(|_| left)],
+            };
+            for child in order.into_iter().flatten() {
+                debug_assert!(depth < stack.len(), "BVH deeper than the traversal stack");
+                stack[depth] = child;
+                depth += 1;
+            }
+        }
+        best.map(|(t, i)| Hit { t, triangle: self.original[i] })
+    }
+}
+
+/// Builds the subtree at `depth` over `items` (whose first element has leaf index `offset`);
+/// returns its node index.
+fn build_node(items: &mut [BuildItem], offset: usize, depth: usize, nodes: &mut Vec<Node>) -> u32 {
+    let mut bounds = Bounds::EMPTY;
+    items.iter().for_each(|it| bounds.grow(&it.bounds));
+    let node_index = nodes.len();
+    let leaf = Node { bounds, first: offset as u32, count: items.len() as u32 };
+    nodes.push(leaf);
+    if items.len() <= 2 || depth >= MAX_DEPTH {
+        return node_index as u32;
+    }
+    let split = match best_sah_split(items, &bounds) {
+        Some(split) => split,
+        None if items.len() > MAX_LEAF_SIZE => median_split(items),
+        None => return node_index as u32,
+    };
+    let (left, right) = items.split_at_mut(split);
+    build_node(left, offset, depth + 1, nodes);
+    let right_index = build_node(right, offset + split, depth + 1, nodes);
+    nodes[node_index] = Node { bounds, first: right_index, count: 0 };
+    node_index as u32
+}
+
+/// Partitions `items` by the cheapest binned SAH plane and returns the split position, or `None`
+/// when staying a leaf is cheaper (or no plane separates the centroids).
+fn best_sah_split(items: &mut [BuildItem], bounds: &Bounds) -> Option<usize> {
+    let mut centroid_bounds = Bounds::EMPTY;
+    items.iter().for_each(|it| centroid_bounds.grow_point(&Point3::from(it.centroid)));
+    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bins left of the plane)
+    for axis in 0..3 {
+        let (lo, hi) = (centroid_bounds.min[axis], centroid_bounds.max[axis]);
+        if hi - lo <= 1e-9 {
+            continue;
+        }
+        let mut bins = [(0_usize, Bounds::EMPTY); BINS];
+        for it in items.iter() {
+            let b = &mut bins[bin_index(it.centroid[axis], lo, hi)];
+            b.0 += 1;
+            b.1.grow(&it.bounds);
+        }
+        let mut right_cost = [0.0_f32; BINS];
+        let (mut count, mut acc) = (0, Bounds::EMPTY);
+        for k in (1..BINS).rev() {
+            count += bins[k].0;
+            acc.grow(&bins[k].1);
+            right_cost[k] = count as f32 * acc.half_area();
+        }
+        let (mut count, mut acc) = (0, Bounds::EMPTY);
+        for k in 1..BINS {
+            count += bins[k - 1].0;
+            acc.grow(&bins[k - 1].1);
+            let cost = count as f32 * acc.half_area() + right_cost[k];
+            if count > 0 && count < items.len() && best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, k));
+            }
+        }
+    }
+    let (cost, axis, k) = best?;
+    let leaf_cost = items.len() as f32 * bounds.half_area();
+    if cost >= leaf_cost && items.len() <= MAX_LEAF_SIZE {
+        return None;
+    }
+    let (lo, hi) = (centroid_bounds.min[axis], centroid_bounds.max[axis]);
+    let split = partition_in_place(items, |it| bin_index(it.centroid[axis], lo, hi) < k);
+    (split > 0 && split < items.len()).then_some(split)
+}
+
+/// SAH bin of centroid coordinate `c` within `[lo, hi]`.
+fn bin_index(c: f32, lo: f32, hi: f32) -> usize {
+    (((c - lo) / (hi - lo) * BINS as f32) as usize).min(BINS - 1)
+}
+
+/// Splits at the median centroid along the longest axis of the centroids.
+fn median_split(items: &mut [BuildItem]) -> usize {
+    let mut cb = Bounds::EMPTY;
+    items.iter().for_each(|it| cb.grow_point(&Point3::from(it.centroid)));
+    let axis = (0..3).max_by(|&a, &b| (cb.max[a] - cb.min[a]).total_cmp(&(cb.max[b] - cb.min[b]))).unwrap_or(0);
+    let mid = items.len() / 2;
+    items.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+    mid
+}
+
+/// Moves the items satisfying `pred` to the front; returns how many there are.
+fn partition_in_place(items: &mut [BuildItem], pred: impl Fn(&BuildItem) -> bool) -> usize {
+    let mut split = 0;
+    for i in 0..items.len() {
+        if pred(&items[i]) {
+            items.swap(split, i);
+            split += 1;
+        }
+    }
+    split
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn brute_force(tris: &[[Point3<f32>; 3]], ray: &Ray) -> Option<Hit> {
+        let (o, d) = (ray.origin.coords, ray.direction);
+        tris.iter()
+            .enumerate()
+            .filter_map(|(i, tri)| PreparedTriangle::new(*tri).intersect(&o, &d, f32::INFINITY).map(|t| (t, i)))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(t, i)| Hit { t, triangle: i as u32 })
+    }
+
+    #[test]
+    fn ray_hits_triangle_at_expected_distance_from_either_side() {
+        let tri = PreparedTriangle::new([[0.0, 0.0, 2.0], [1.0, 0.0, 2.0], [0.0, 1.0, 2.0]].map(Point3::from));
+        let origin = Vector3::new(0.2, 0.2, 0.0);
+        // Unnormalised direction: t is in units of the direction (here z = 1, so t = depth).
+        assert_eq!(tri.intersect(&origin, &Vector3::new(0.0, 0.0, 1.0), f32::INFINITY), Some(2.0));
+        let behind = Vector3::new(0.2, 0.2, 4.0);
+        assert_eq!(tri.intersect(&behind, &Vector3::new(0.0, 0.0, -2.0), f32::INFINITY), Some(1.0));
+        assert_eq!(tri.intersect(&Vector3::new(0.8, 0.8, 0.0), &Vector3::z(), f32::INFINITY), None, "outside");
+        assert_eq!(tri.intersect(&origin, &Vector3::z(), 1.5), None, "beyond t_max");
+        assert_eq!(tri.intersect(&origin, &Vector3::x(), f32::INFINITY), None, "parallel");
+    }
+
+    #[test]
+    fn bvh_agrees_with_brute_force_on_random_rays() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut p = |s: f32| Point3::new(rng.random_range(-s..s), rng.random_range(-s..s), rng.random_range(-s..s));
+        let tris: Vec<[Point3<f32>; 3]> = (0..500)
+            .map(|_| {
+                let c = p(2.0);
+                [c + p(0.3).coords, c + p(0.3).coords, c + p(0.3).coords]
+            })
+            .collect();
+        let bvh = Bvh::build(&tris);
+        assert_eq!(bvh.len(), tris.len());
+        let mut hits = 0;
+        for _ in 0..2000 {
+            let ray = Ray { origin: p(3.0), direction: p(1.0).coords };
+            let (expected, got) = (brute_force(&tris, &ray), bvh.nearest_hit(&ray, f32::INFINITY));
+            assert_eq!(got.map(|h| h.triangle), expected.map(|h| h.triangle), "ray {ray:?}");
+            hits += usize::from(got.is_some());
+        }
+        assert!(hits > 200, "the test exercises hits, got {hits}");
+    }
+
+    #[test]
+    fn empty_and_degenerate_inputs_do_not_panic() {
+        let ray = Ray { origin: Point3::origin(), direction: Vector3::z() };
+        assert_eq!(Bvh::build(&[]).nearest_hit(&ray, f32::INFINITY), None);
+        let same = [[Point3::new(0.0, 0.0, 1.0); 3]; 40];
+        assert_eq!(Bvh::build(&same).nearest_hit(&ray, f32::INFINITY), None);
+    }
+}

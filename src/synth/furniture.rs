@@ -1,0 +1,262 @@
+//! Furniture designs built from primitives, each in its own object frame: z up, origin at the
+//! centre of the object's footprint on the floor, front facing +y. Sizes are in metres.
+//!
+//! Every design is a list of coloured parts; the parts' bounding boxes double as the coarse
+//! collision shapes the layout uses, so a chair seat may slide under a table top but its back may not.
+
+use std::f32::consts::{FRAC_PI_4, SQRT_2, TAU};
+
+use nalgebra::Point3;
+use serde::{Deserialize, Serialize};
+
+use super::primitives::{beam, block, curved_panel, cylinder, frustum};
+use crate::classes::replica;
+use crate::ids::ClassId;
+use crate::mesh::TriangleMesh;
+
+/// A furniture design. Instances of one design are identical up to their pose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Design {
+    /// Wooden chair: four thin legs, thin seat, tall back of horizontal slats.
+    LadderBackChair,
+    /// Office chair: round seat on a central column over a five-arm star base, low curved back.
+    SwivelChair,
+    /// Four-legged table, 1.6 × 0.9 × 0.75 m, high enough for chairs to tuck under.
+    DiningTable,
+    /// Two-door cabinet on a plinth, 0.8 × 0.45 × 1.2 m.
+    Cabinet,
+    /// Cardboard storage box with a lid.
+    StorageBox,
+    /// Floor lamp: round base, thin pole, conical shade.
+    FloorLamp,
+    /// Bar stool: round top on four splayed legs with a footrest.
+    Stool,
+    /// Nightstand: carcass on short legs with two inset drawer fronts.
+    Nightstand,
+}
+
+const WOOD: [u8; 3] = [139, 94, 60];
+const WOOD_LIGHT: [u8; 3] = [196, 160, 110];
+const METAL_DARK: [u8; 3] = [48, 48, 54];
+
+impl Design {
+    /// Every design, in a fixed order.
+    pub const ALL: [Design; 8] = [
+        Self::LadderBackChair,
+        Self::SwivelChair,
+        Self::DiningTable,
+        Self::Cabinet,
+        Self::StorageBox,
+        Self::FloorLamp,
+        Self::Stool,
+        Self::Nightstand,
+    ];
+
+    /// Stable snake_case name, as written to `scene.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::LadderBackChair => "ladder_back_chair",
+            Self::SwivelChair => "swivel_chair",
+            Self::DiningTable => "dining_table",
+            Self::Cabinet => "cabinet",
+            Self::StorageBox => "storage_box",
+            Self::FloorLamp => "floor_lamp",
+            Self::Stool => "stool",
+            Self::Nightstand => "nightstand",
+        }
+    }
+
+    /// Replica semantic class of the design.
+    pub fn class(self) -> ClassId {
+        match self {
+            Self::LadderBackChair | Self::SwivelChair => replica::CHAIR,
+            Self::DiningTable => replica::TABLE,
+            Self::Cabinet => replica::CABINET,
+            Self::StorageBox => replica::BOX,
+            Self::FloorLamp => replica::LAMP,
+            Self::Stool => replica::STOOL,
+            Self::Nightstand => replica::NIGHTSTAND,
+        }
+    }
+
+    /// True for the chair designs.
+    pub fn is_chair(self) -> bool {
+        self.class() == replica::CHAIR
+    }
+
+    /// The coloured parts in the object frame.
+    pub fn parts(self) -> Vec<TriangleMesh> {
+        match self {
+            Self::LadderBackChair => ladder_back_chair(),
+            Self::SwivelChair => swivel_chair(),
+            Self::DiningTable => dining_table(),
+            Self::Cabinet => cabinet(),
+            Self::StorageBox => storage_box(),
+            Self::FloorLamp => floor_lamp(),
+            Self::Stool => stool(),
+            Self::Nightstand => nightstand(),
+        }
+    }
+
+    /// All parts merged into one mesh in the object frame.
+    pub fn mesh(self) -> TriangleMesh {
+        TriangleMesh::merged(&self.parts())
+    }
+}
+
+/// Paints `mesh` one colour.
+fn paint(mesh: TriangleMesh, rgb: [u8; 3]) -> TriangleMesh {
+    mesh.with_uniform_color(rgb)
+}
+
+fn ladder_back_chair() -> Vec<TriangleMesh> {
+    let (leg, x, y) = (0.035, 0.2025, 0.19);
+    let mut parts = vec![paint(block(0.0, 0.0, 0.43, [0.44, 0.42, 0.035]), [160, 110, 70])];
+    for sx in [-x, x] {
+        parts.push(paint(block(sx, y, 0.0, [leg, leg, 0.43]), WOOD)); // front leg
+        parts.push(paint(block(sx, -y, 0.0, [leg, leg, 0.43]), WOOD)); // rear leg
+        parts.push(paint(block(sx, -y, 0.465, [leg, leg, 0.485]), WOOD)); // back post
+        parts.push(paint(block(sx, 0.0, 0.12, [0.02, 2.0 * y - leg, 0.03]), WOOD)); // side stretcher
+    }
+    // Three slats and a top rail flush with the posts' tops at 0.95 m.
+    for (z, height) in [(0.58, 0.06), (0.70, 0.06), (0.82, 0.06), (0.895, 0.055)] {
+        parts.push(paint(block(0.0, -y, z, [2.0 * x - leg, 0.02, height]), WOOD));
+    }
+    parts
+}
+
+fn swivel_chair() -> Vec<TriangleMesh> {
+    let fabric = [40, 70, 130];
+    let mut parts = vec![paint(cylinder(Point3::new(0.0, 0.0, 0.02), 0.05, 0.07, 12), METAL_DARK)];
+    for k in 0..5 {
+        let a = TAU * k as f32 / 5.0 + FRAC_PI_4;
+        let (s, c) = a.sin_cos();
+        let arm = beam(Point3::new(0.04 * c, 0.04 * s, 0.05), Point3::new(0.3 * c, 0.3 * s, 0.05), 0.04);
+        parts.push(paint(arm, METAL_DARK));
+        parts.push(paint(cylinder(Point3::new(0.28 * c, 0.28 * s, 0.0), 0.025, 0.03, 10), METAL_DARK));
+    }
+    parts.push(paint(cylinder(Point3::new(0.0, 0.0, 0.09), 0.025, 0.31, 12), [150, 150, 155]));
+    parts.push(paint(cylinder(Point3::new(0.0, 0.0, 0.40), 0.24, 0.07, 28), fabric));
+    let support = beam(Point3::new(0.0, -0.19, 0.47), Point3::new(0.0, -0.235, 0.60), 0.04);
+    parts.push(paint(support, METAL_DARK));
+    let back = curved_panel((0.22, 0.26), (200f32.to_radians(), 340f32.to_radians()), (0.56, 0.84), 14);
+    parts.push(paint(back, fabric));
+    parts
+}
+
+fn dining_table() -> Vec<TriangleMesh> {
+    let (x, y) = (0.73, 0.38);
+    let mut parts = vec![paint(block(0.0, 0.0, 0.72, [1.6, 0.9, 0.03]), WOOD_LIGHT)];
+    for (sx, sy) in [(-x, -y), (-x, y), (x, -y), (x, y)] {
+        parts.push(paint(block(sx, sy, 0.0, [0.06, 0.06, 0.72]), WOOD));
+    }
+    for s in [-1.0, 1.0] {
+        parts.push(paint(block(0.0, s * y, 0.62, [2.0 * x - 0.06, 0.02, 0.1]), WOOD));
+        parts.push(paint(block(s * x, 0.0, 0.62, [0.02, 2.0 * y - 0.06, 0.1]), WOOD));
+    }
+    parts
+}
+
+fn cabinet() -> Vec<TriangleMesh> {
+    let mut parts = vec![
+        paint(block(0.0, -0.01, 0.0, [0.76, 0.41, 0.06]), [70, 70, 70]),
+        paint(block(0.0, 0.0, 0.06, [0.8, 0.45, 1.14]), [225, 220, 205]),
+    ];
+    for s in [-1.0, 1.0] {
+        parts.push(paint(block(s * 0.1975, 0.2325, 0.08, [0.385, 0.015, 1.1]), [236, 233, 222]));
+        parts.push(paint(block(s * 0.05, 0.255, 0.55, [0.02, 0.03, 0.15]), [60, 60, 60]));
+    }
+    parts
+}
+
+fn storage_box() -> Vec<TriangleMesh> {
+    vec![
+        paint(block(0.0, 0.0, 0.0, [0.5, 0.38, 0.3]), [185, 145, 95]),
+        paint(block(0.0, 0.0, 0.3, [0.52, 0.40, 0.05]), [160, 120, 78]),
+    ]
+}
+
+fn floor_lamp() -> Vec<TriangleMesh> {
+    vec![
+        paint(cylinder(Point3::origin(), 0.16, 0.03, 24), METAL_DARK),
+        paint(cylinder(Point3::new(0.0, 0.0, 0.03), 0.013, 1.27, 8), [190, 190, 195]),
+        paint(frustum(Point3::new(0.0, 0.0, 1.30), 0.22, 0.14, 0.32, 24), [240, 228, 195]),
+    ]
+}
+
+fn stool() -> Vec<TriangleMesh> {
+    let metal = [70, 70, 75];
+    let mut parts = vec![paint(cylinder(Point3::new(0.0, 0.0, 0.60), 0.17, 0.04, 24), [150, 50, 40])];
+    let corner = |r: f32, k: usize, z: f32| {
+        let (s, c) = (FRAC_PI_4 + TAU * k as f32 / 4.0).sin_cos();
+        Point3::new(r * c, r * s, z)
+    };
+    // Each splayed leg tilts diagonally to its square section: lift it so the lowest corner of
+    // its 3 cm foot (half-diagonal 0.015·√2) touches the floor.
+    let foot_lift = 0.015 * SQRT_2 * 0.08_f32.atan2(0.60).sin();
+    for k in 0..4 {
+        parts.push(paint(beam(corner(0.19, k, foot_lift), corner(0.11, k, 0.60), 0.03), metal));
+        parts.push(paint(beam(corner(0.155, k, 0.25), corner(0.155, (k + 1) % 4, 0.25), 0.02), metal));
+    }
+    parts
+}
+
+fn nightstand() -> Vec<TriangleMesh> {
+    let (carcass, drawer, brass) = ([105, 70, 45], [140, 100, 65], [200, 170, 80]);
+    let mut parts = vec![
+        paint(block(0.0, 0.0, 0.56, [0.45, 0.40, 0.02]), carcass),
+        paint(block(0.0, 0.0, 0.08, [0.45, 0.40, 0.02]), carcass),
+        paint(block(0.0, -0.19, 0.10, [0.41, 0.02, 0.46]), carcass),
+        paint(block(0.0, 0.19, 0.32, [0.41, 0.02, 0.025]), carcass),
+    ];
+    for s in [-1.0, 1.0] {
+        parts.push(paint(block(s * 0.215, 0.0, 0.10, [0.02, 0.40, 0.46]), carcass));
+        for sy in [-1.0, 1.0] {
+            parts.push(paint(block(s * 0.2, sy * 0.175, 0.0, [0.04, 0.04, 0.08]), carcass));
+        }
+    }
+    // Drawer fronts sit 2 cm behind the carcass front; knobs reach forward to it.
+    for z in [0.105, 0.35] {
+        parts.push(paint(block(0.0, 0.17, z, [0.40, 0.02, 0.205]), drawer));
+        parts.push(paint(block(0.0, 0.19, z + 0.09, [0.05, 0.02, 0.025]), brass));
+    }
+    parts
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn designs_have_realistic_sizes_and_stand_on_the_floor() {
+        for design in Design::ALL {
+            let b = design.mesh().bounds().expect("design has vertices");
+            let e = b.extent();
+            assert!(b.min.z.abs() < 1e-4, "{} stands on z = 0, min z = {}", design.name(), b.min.z);
+            assert!(e.x < 1.7 && e.y < 1.0 && e.z < 1.7, "{} fits a room: {e:?}", design.name());
+            assert!((b.center().x).abs() < 0.02 && (b.center().y).abs() < 0.05, "{} is centred", design.name());
+        }
+        let table = Design::DiningTable.mesh().bounds().expect("table");
+        assert!((table.max.z - 0.75).abs() < 1e-6, "table is 0.75 m high");
+    }
+
+    #[test]
+    fn chair_designs_differ_in_shape() {
+        let a = Design::LadderBackChair.mesh().bounds().expect("chair A");
+        let b = Design::SwivelChair.mesh().bounds().expect("chair B");
+        assert!(a.max.z > b.max.z + 0.05, "the ladder-back is the taller chair");
+        assert!(b.extent().x > a.extent().x + 0.1, "the star base is wider than the legs");
+        assert!(Design::LadderBackChair.is_chair() && Design::SwivelChair.is_chair());
+    }
+
+    #[test]
+    fn every_part_is_coloured() {
+        for design in Design::ALL {
+            for part in design.parts() {
+                assert_eq!(part.validate(), Ok(()), "{}", design.name());
+                assert!(part.colors.is_some(), "{} parts are painted", design.name());
+            }
+        }
+    }
+}

@@ -1,0 +1,36 @@
+//! Procedural synthetic indoor scenes with exact ground truth, deterministic from a seed.
+//!
+//! A scene is a room (floor and walls, Replica background classes) furnished with primitive-built
+//! [`Design`]s — two clearly different chair designs in several identical copies each, a table with
+//! chairs tucked under it, a cabinet, a box, a lamp, a stool, a nightstand — and a camera walking
+//! along one side of the room so that every object is only partly observed. Frames are ray cast
+//! through a BVH on demand ([`SyntheticScene`] is a [`FrameSource`](crate::dataset::FrameSource)),
+//! and [`write_replica_layout`] writes them in the Replica vMAP layout with ground-truth meshes.
+//!
+//! ```no_run
+//! use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
+//! let scene = SyntheticScene::generate(7, Preset::Small)?;
+//! write_replica_layout(&scene, std::path::Path::new("/tmp/synthetic"), |_, _| {})?;
+//! # Ok::<(), catmap::CatmapError>(())
+//! ```
+
+pub mod bvh;
+pub mod description;
+pub mod furniture;
+pub mod geometry;
+pub mod layout;
+pub mod preset;
+pub mod primitives;
+pub mod render;
+pub mod replica_writer;
+pub mod room;
+pub mod scene;
+pub mod trajectory;
+
+pub use description::{ObjectDescription, SceneDescription};
+pub use furniture::Design;
+pub use preset::Preset;
+pub use render::RenderedFrame;
+pub use replica_writer::write_replica_layout;
+pub use room::{Room, SurfaceLabel};
+pub use scene::{SceneObject, SyntheticScene};

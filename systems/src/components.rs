@@ -1,0 +1,86 @@
+//! Components of the mapper's entities: camera frames, objects, the background and categories.
+
+use std::collections::BTreeMap;
+
+use bevy_ecs::prelude::*;
+use catmap::frame_observation::FrameObservation;
+use catmap::keyframes::KeyframeWindow;
+use catmap::observed_cloud::ObservedCloud;
+use catmap::object_view::ObjectView;
+use catmap::oriented_box::OrientedBox;
+use catmap::pixel_box::PixelBox;
+use catmap::{ClassId, FrameIndex, ObjectId, SharedFrame};
+use rand_chacha::ChaCha8Rng;
+
+/// A frame received from the stream. Lives for one tick; keyframe windows keep what they need.
+#[derive(Component, Debug, Clone)]
+pub struct CameraFrame(pub SharedFrame);
+
+/// What the frame's masks say about each object (added by the segment stage).
+#[derive(Component, Debug, Clone)]
+pub struct FrameObservations(pub FrameObservation);
+
+/// An object entity: one per dataset instance id.
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Object {
+    /// The dataset's instance id.
+    pub id: ObjectId,
+}
+
+/// Marks the background entity (instance 0 and every background class).
+#[derive(Component, Debug, Clone, Copy, Default)]
+pub struct Background;
+
+/// Pixel votes per semantic class, summed over all frames.
+#[derive(Component, Debug, Clone, Default, PartialEq)]
+pub struct ClassVotes(pub BTreeMap<ClassId, u64>);
+
+/// The object's class: the majority of its votes.
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ObjectClass(pub ClassId);
+
+/// The object's 2D boxes in the latest frame it was seen in.
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct LatestBox {
+    /// Frame the boxes come from.
+    pub frame: FrameIndex,
+    /// Tight box of the object's mask.
+    pub tight: PixelBox,
+    /// The box enlarged by 20 % (training samples pixels here).
+    pub sample: PixelBox,
+}
+
+/// The object's keyframe window; each slot keeps the crop of its frame inside the object's
+/// enlarged 2D box (the background keeps whole frames).
+#[derive(Component, Debug, Clone, Default)]
+pub struct Keyframes(pub KeyframeWindow<ObjectView>);
+
+/// Number of frames the object (or background) was visible in.
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct VisibleFrames(pub u64);
+
+/// The object's observed points, accumulated in a voxel grid.
+#[derive(Component, Debug, Clone)]
+pub struct ObjectCloud(pub ObservedCloud);
+
+/// The minimum-volume oriented box of the observed cloud, and the cloud size it was fitted at.
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct ObjectBounds {
+    /// The box (edges at least `min_extent_m`).
+    pub oriented_box: OrientedBox,
+    /// Cloud voxels when the box was fitted.
+    pub fitted_at_points: usize,
+}
+
+/// The object's own random generator, seeded from `(config.seed, object id)`.
+#[derive(Component, Debug, Clone)]
+pub struct ObjectRng(pub ChaCha8Rng);
+
+/// A category entity: one per semantic class seen, listing its objects.
+#[derive(Component, Debug, Clone, PartialEq, Eq)]
+pub struct Category {
+    /// The class.
+    pub class: ClassId,
+    /// Its objects, sorted.
+    pub members: Vec<ObjectId>,
+}

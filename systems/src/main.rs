@@ -1,0 +1,61 @@
+//! The `catmap` command line: `run` maps a dataset (or a synthetic scene), `synth` writes a
+//! synthetic scene, `config` prints the default configuration.
+
+use std::path::PathBuf;
+
+use anyhow::Context as _;
+use clap::{Parser, Subcommand};
+
+mod cli_run;
+mod cli_synth;
+mod progress;
+
+/// Object-level RGB-D mapping with category-level neural fields.
+#[derive(Parser, Debug)]
+#[command(name = "catmap", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Map a dataset (default: synthesise the default scene into OUT/scene and map it).
+    Run(cli_run::RunArgs),
+    /// Write a synthetic scene in the Replica (vMAP) layout, with ground-truth meshes.
+    Synth(cli_synth::SynthArgs),
+    /// Print the default configuration as TOML (a config file lists only what it changes).
+    Config,
+}
+
+fn main() -> anyhow::Result<()> {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
+    tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_target(false).init();
+    let cli = Cli::parse();
+    match cli.command.unwrap_or_else(|| Command::Run(cli_run::RunArgs::default())) {
+        Command::Run(args) => cli_run::run(&args),
+        Command::Synth(args) => cli_synth::synth(&args),
+        Command::Config => {
+            print_stdout(&catmap::MapperConfig::default().to_toml());
+            Ok(())
+        }
+    }
+}
+
+/// Writes text to standard output (the binary's one place that prints results).
+#[expect(clippy::print_stdout, reason = "the CLI prints its results")]
+fn print_stdout(text: &str) {
+    print!("{text}");
+}
+
+/// Reads a config file (TOML, overrides only), or the defaults.
+fn load_config(path: Option<&PathBuf>) -> anyhow::Result<catmap::MapperConfig> {
+    match path {
+        None => Ok(catmap::MapperConfig::default()),
+        Some(path) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read config {}", path.display()))?;
+            catmap::MapperConfig::from_toml(&text).with_context(|| format!("in config {}", path.display()))
+        }
+    }
+}

@@ -1,0 +1,184 @@
+//! The `Mapper` facade: a `World` with the mapper's resources and schedule, fed frame by frame.
+
+use std::collections::BTreeMap;
+use std::time::Duration;
+
+use bevy_ecs::prelude::*;
+use catmap::keyframes::KeyframeWindow;
+use catmap::observed_cloud::ObservedCloud;
+use catmap::rng::{RngStream, seeded_rng};
+use catmap::stream::{StreamMessage, StreamStats};
+use catmap::{MapperConfig, RgbdFrame};
+use crossbeam_channel::{Receiver, Sender, TrySendError, bounded};
+
+use crate::components::{Background, Keyframes, ObjectCloud, ObjectRng, VisibleFrames};
+use crate::log_rerun::{Rerun, log_world_setup};
+use crate::resources::{CategoryIndex, FrameInbox, ObjectIndex, Settings, StageTimes, StreamProgress};
+use crate::schedule::build_schedule;
+use crate::snapshot::MapSnapshot;
+
+/// Errors of the mapper facade.
+#[derive(Debug, thiserror::Error)]
+pub enum MapperError {
+    /// The configuration is invalid.
+    #[error(transparent)]
+    Config(#[from] catmap::CatmapError),
+    /// A pushed frame is malformed.
+    #[error("frame {index}: {reason}")]
+    BadFrame {
+        /// The frame's index.
+        index: u64,
+        /// What is wrong.
+        reason: String,
+    },
+    /// `push` was called on a mapper fed by a reader thread, or after the end of the stream.
+    #[error("this mapper does not accept pushed frames: {0}")]
+    NotAccepting(&'static str),
+}
+
+/// A streaming mapper: push frames (or attach a reader thread), step, and read the map.
+pub struct Mapper {
+    world: World,
+    schedule: Schedule,
+    /// Sending end for `push`; `None` when a reader thread feeds the inbox, or after `end_stream`.
+    pusher: Option<Sender<StreamMessage>>,
+}
+
+impl Mapper {
+    /// A mapper fed by [`Mapper::push`].
+    pub fn new(config: MapperConfig) -> Result<Self, MapperError> {
+        let (sender, receiver) = bounded(config.stream.channel_capacity.max(1));
+        let mut mapper = Self::with_inbox(config, receiver)?;
+        mapper.pusher = Some(sender);
+        Ok(mapper)
+    }
+
+    /// A mapper fed by a reader thread's channel (see `catmap::stream::FrameStream`).
+    pub fn with_inbox(config: MapperConfig, inbox: Receiver<StreamMessage>) -> Result<Self, MapperError> {
+        config.validate()?;
+        let mut world = World::new();
+        world.spawn((
+            Background,
+            Keyframes(KeyframeWindow::default()),
+            VisibleFrames::default(),
+            ObjectCloud(ObservedCloud::new(config.objects.background_voxel_m)),
+            ObjectRng(seeded_rng(config.seed, RngStream::Background)),
+        ));
+        world.insert_resource(Settings(config));
+        world.insert_resource(FrameInbox(inbox));
+        world.init_resource::<StreamProgress>();
+        world.init_resource::<ObjectIndex>();
+        world.init_resource::<CategoryIndex>();
+        world.init_resource::<StageTimes>();
+        Ok(Self { world, schedule: build_schedule(), pusher: None })
+    }
+
+    /// Logs to `recording` from now on (the `Log` stage only runs with a recording).
+    pub fn set_recording(&mut self, recording: rerun::RecordingStream) {
+        log_world_setup(&recording);
+        self.world.insert_resource(Rerun(recording));
+    }
+
+    /// Queues one frame. When the inbox is full the mapper steps until there is room, so no
+    /// frame is ever dropped.
+    pub fn push(&mut self, frame: RgbdFrame) -> Result<(), MapperError> {
+        frame.validate().map_err(|reason| MapperError::BadFrame { index: frame.index.0, reason })?;
+        let mut message = StreamMessage::Frame(std::sync::Arc::new(frame));
+        loop {
+            let sender = self.pusher.as_ref().ok_or(MapperError::NotAccepting("no push inbox"))?;
+            match sender.try_send(message) {
+                Ok(()) => return Ok(()),
+                Err(TrySendError::Full(returned)) => {
+                    message = returned;
+                    self.step();
+                }
+                Err(TrySendError::Disconnected(_)) => return Err(MapperError::NotAccepting("inbox closed")),
+            }
+        }
+    }
+
+    /// Tells a push-fed mapper that no more frames will come.
+    pub fn end_stream(&mut self) {
+        if let Some(sender) = self.pusher.take() {
+            // The receiver lives in the world, so the channel is open; a full one is drained first.
+            let mut message = StreamMessage::End(StreamStats::default());
+            loop {
+                match sender.try_send(message) {
+                    Ok(()) | Err(TrySendError::Disconnected(_)) => break,
+                    Err(TrySendError::Full(returned)) => {
+                        message = returned;
+                        self.step();
+                    }
+                }
+            }
+        }
+    }
+
+    /// Runs every stage once.
+    pub fn step(&mut self) {
+        self.schedule.run(&mut self.world);
+    }
+
+    /// The reader's statistics, once the stream has ended.
+    pub fn stream_stats(&self) -> Option<StreamStats> {
+        self.world.resource::<StreamProgress>().ended
+    }
+
+    /// Whether the end-of-stream message has been ingested.
+    pub fn stream_ended(&self) -> bool {
+        self.world.resource::<StreamProgress>().ended.is_some()
+    }
+
+    /// Steps until the stream ends, calling `on_step` after each step with the frames ingested so far.
+    pub fn run_to_end(&mut self, mut on_step: impl FnMut(u64)) {
+        while !self.stream_ended() {
+            let inbox = self.world.resource::<FrameInbox>().0.clone();
+            if inbox.is_empty() {
+                // Wait for the reader instead of spinning; the timeout keeps the loop responsive.
+                let mut select = crossbeam_channel::Select::new();
+                select.recv(&inbox);
+                let _ = select.ready_timeout(Duration::from_millis(100));
+                continue;
+            }
+            self.step();
+            on_step(self.world.resource::<StreamProgress>().frames_ingested);
+        }
+    }
+
+    /// A read-only view of the map as it is now.
+    pub fn snapshot(&mut self) -> MapSnapshot {
+        MapSnapshot::of(&mut self.world)
+    }
+
+    /// Ends the run: flushes the recording and returns the final map.
+    pub fn finish(mut self) -> MapSnapshot {
+        let snapshot = self.snapshot();
+        if let Some(rerun) = self.world.get_resource::<Rerun>() {
+            if let Err(e) = rerun.0.flush_blocking() {
+                tracing::warn!(error = %e, "flushing the Rerun recording failed");
+            }
+        }
+        snapshot
+    }
+
+    /// Like [`Mapper::finish`], also returning the seconds spent per stage.
+    pub fn finish_keeping_times(self) -> (MapSnapshot, BTreeMap<&'static str, f64>) {
+        let times = self.stage_seconds();
+        (self.finish(), times)
+    }
+
+    /// Seconds spent per stage so far.
+    pub fn stage_seconds(&self) -> BTreeMap<&'static str, f64> {
+        self.world.resource::<StageTimes>().0.iter().map(|(k, v)| (*k, v.as_secs_f64())).collect()
+    }
+
+    /// The ECS world, for inspection in tests and tools.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The ECS world, mutable (queries need `&mut World`).
+    pub fn world_mut(&mut self) -> &mut World {
+        &mut self.world
+    }
+}

@@ -1,0 +1,62 @@
+//! The one place where stage order is defined.
+
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, SingleThreadedExecutor};
+
+use crate::categorize::update_categories;
+use crate::cleanup::despawn_consumed_frames;
+use crate::clouds::{accumulate_clouds, refresh_object_bounds};
+use crate::ingest::ingest_frames;
+use crate::log_rerun::{Rerun, log_camera_frames, log_instance_legend, log_object_boxes, log_object_clouds};
+use crate::segment::observe_frames;
+use crate::track::{record_background_views, record_object_views, spawn_new_objects};
+
+/// The mapper's stages, in the order they run each tick.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MapperSystems {
+    /// Frames leave the stream.
+    Ingest,
+    /// Masks are split into per-object observations.
+    Segment,
+    /// Objects appear and take in their views.
+    Track,
+    /// Observed clouds and oriented boxes grow.
+    Map,
+    /// Category membership follows object classes.
+    Categorize,
+    /// Rerun logging (only when a `Rerun` resource exists).
+    Log,
+    /// Consumed frames are despawned.
+    Cleanup,
+}
+
+/// Builds the mapper's schedule: single-threaded (rayon parallelises inside systems), with
+/// ambiguity detection as an error so that every order is stated here.
+pub fn build_schedule() -> Schedule {
+    let mut schedule = Schedule::default();
+    schedule.set_executor(SingleThreadedExecutor::new());
+    schedule.set_build_settings(ScheduleBuildSettings { ambiguity_detection: LogLevel::Error, ..Default::default() });
+    schedule.configure_sets(
+        (
+            MapperSystems::Ingest,
+            MapperSystems::Segment,
+            MapperSystems::Track,
+            MapperSystems::Map,
+            MapperSystems::Categorize,
+            MapperSystems::Log,
+            MapperSystems::Cleanup,
+        )
+            .chain(),
+    );
+    schedule.configure_sets(MapperSystems::Log.run_if(resource_exists::<Rerun>));
+    schedule.add_systems((
+        ingest_frames.in_set(MapperSystems::Ingest),
+        observe_frames.in_set(MapperSystems::Segment),
+        (spawn_new_objects, record_object_views, record_background_views).chain().in_set(MapperSystems::Track),
+        (accumulate_clouds, refresh_object_bounds).chain().in_set(MapperSystems::Map),
+        update_categories.in_set(MapperSystems::Categorize),
+        (log_camera_frames, log_instance_legend, log_object_clouds, log_object_boxes).chain().in_set(MapperSystems::Log),
+        despawn_consumed_frames.in_set(MapperSystems::Cleanup),
+    ));
+    schedule
+}

@@ -1,0 +1,52 @@
+//! The recording a run writes decodes with Rerun's own decoder and holds the camera, its images
+//! and every object's cloud and box (issue 2).
+
+use std::collections::BTreeSet;
+
+use catmap::dataset::FrameSource;
+use catmap::synth::{Preset, SyntheticScene};
+use catmap::MapperConfig;
+use catmap_systems::Mapper;
+use re_log_encoding::DecoderApp;
+use re_log_types::LogMsg;
+
+/// Entity paths found in an .rrd file, without the leading slash.
+fn entity_paths(path: &std::path::Path) -> BTreeSet<String> {
+    let file = std::fs::File::open(path).expect("the recording exists");
+    let mut paths = BTreeSet::new();
+    for message in DecoderApp::decode_lazy(std::io::BufReader::new(file)) {
+        if let LogMsg::ArrowMsg(_, arrow) = message.expect("every message decodes") {
+            let chunk = re_chunk::Chunk::from_arrow_msg(&arrow).expect("every message is a chunk");
+            paths.insert(chunk.entity_path().to_string().trim_start_matches('/').to_owned());
+        }
+    }
+    paths
+}
+
+#[test]
+fn a_saved_recording_holds_camera_images_and_object_entities() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let rrd = dir.path().join("recording.rrd");
+    let scene = SyntheticScene::generate(5, Preset::Small).expect("scene");
+    {
+        let rec = rerun::RecordingStreamBuilder::new("catmap_test").save(&rrd).expect("open the recording file");
+        let mut mapper = Mapper::new(MapperConfig { seed: 5, ..MapperConfig::default() }).expect("config");
+        mapper.set_recording(rec);
+        for position in 0..scene.len() {
+            mapper.push(scene.read_frame(position).expect("frame")).expect("push");
+            mapper.step();
+        }
+        mapper.end_stream();
+        mapper.step();
+        let map = mapper.finish();
+        assert!(map.objects.len() >= 3, "the small scene maps several objects");
+    }
+    let paths = entity_paths(&rrd);
+    for expected in ["world", "world/camera", "world/camera/image", "world/camera/image/rgb", "world/camera/image/depth", "world/camera/image/instances"] {
+        assert!(paths.contains(expected), "{expected} missing from {paths:?}");
+    }
+    let objects_with_points = paths.iter().filter(|p| p.starts_with("world/objects/") && p.ends_with("/points")).count();
+    let objects_with_boxes = paths.iter().filter(|p| p.starts_with("world/objects/") && p.ends_with("/box")).count();
+    assert!(objects_with_points >= 3, "object clouds are logged: {paths:?}");
+    assert!(objects_with_boxes >= 3, "object boxes are logged: {paths:?}");
+}
