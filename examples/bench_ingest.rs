@@ -76,7 +76,10 @@ fn main() -> anyhow::Result<()> {
         }
     };
     let open = || ReplicaSequence::open(&dir, &ReplicaOptions::default());
-    say(&format!("machine: {} threads available", std::thread::available_parallelism().map_or(1, |n| n.get())));
+    say(&format!(
+        "machine: {} threads available",
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    ));
 
     // 1. Throughput.
     let source: Arc<dyn FrameSource> = Arc::new(open()?);
@@ -84,7 +87,11 @@ fn main() -> anyhow::Result<()> {
     let (w, h) = (source.intrinsics().width, source.intrinsics().height);
     let config = MapperConfig::default();
     let started = Instant::now();
-    let stream = FrameStream::spawn(source, stream_positions(frames, 1, None), config.stream.channel_capacity);
+    let stream = FrameStream::spawn(
+        source,
+        stream_positions(frames, 1, None),
+        config.stream.channel_capacity,
+    );
     let mut mapper = Mapper::with_inbox(config.clone(), stream.receiver.clone())?;
     mapper.run_to_end(|_| {});
     stream.join();
@@ -96,17 +103,34 @@ fn main() -> anyhow::Result<()> {
         frames as f64 / seconds,
         map.0.objects.len()
     ));
-    say(&format!("  reader thread: decode {:.2} s, blocked on the full channel {:.2} s", stats.decode_time.as_secs_f64(), stats.blocked_time.as_secs_f64()));
+    say(&format!(
+        "  reader thread: decode {:.2} s, blocked on the full channel {:.2} s",
+        stats.decode_time.as_secs_f64(),
+        stats.blocked_time.as_secs_f64()
+    ));
     for (stage, secs) in &map.1 {
-        say(&format!("  {stage:<8} {secs:>7.2} s  ({:.2} ms/frame)", secs * 1000.0 / frames as f64));
+        say(&format!(
+            "  {stage:<8} {secs:>7.2} s  ({:.2} ms/frame)",
+            secs * 1000.0 / frames as f64
+        ));
     }
 
     // 2. Memory over a long stream.
-    let long = Replayed { inner: open()?, len: args.long_frames };
+    let long = Replayed {
+        inner: open()?,
+        len: args.long_frames,
+    };
     let long: Arc<dyn FrameSource> = Arc::new(long);
-    let stream = FrameStream::spawn(long, stream_positions(args.long_frames, 1, None), config.stream.channel_capacity);
+    let stream = FrameStream::spawn(
+        long,
+        stream_positions(args.long_frames, 1, None),
+        config.stream.channel_capacity,
+    );
     let mut mapper = Mapper::with_inbox(config, stream.receiver.clone())?;
-    say(&format!("\nlong stream: {} frames, RSS every {} frames", args.long_frames, args.rss_every));
+    say(&format!(
+        "\nlong stream: {} frames, RSS every {} frames",
+        args.long_frames, args.rss_every
+    ));
     say("  frames   RSS (MiB)");
     let started = Instant::now();
     let mut next_report = args.rss_every;
@@ -123,17 +147,34 @@ fn main() -> anyhow::Result<()> {
     let stats = mapper.stream_stats().unwrap_or_default();
     let seconds = started.elapsed().as_secs_f64();
     let warm: Vec<f64> = samples.iter().skip(samples.len() / 5).map(|s| s.1).collect();
-    let (lo, hi) = warm.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), &r| (lo.min(r), hi.max(r)));
-    say(&format!("  {:.1} frames/s; peak RSS {:.1} MiB", args.long_frames as f64 / seconds, peak_rss_mib()));
-    say(&format!("  after warm-up (last 80 % of samples): RSS {lo:.1}–{hi:.1} MiB, spread {:.1} %", 100.0 * (hi - lo) / lo.max(1e-9)));
-    say(&format!("  reader blocked on the full channel for {:.1} s of {:.1} s (backpressure)", stats.blocked_time.as_secs_f64(), seconds));
+    let (lo, hi) = warm
+        .iter()
+        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), &r| (lo.min(r), hi.max(r)));
+    say(&format!(
+        "  {:.1} frames/s; peak RSS {:.1} MiB",
+        args.long_frames as f64 / seconds,
+        peak_rss_mib()
+    ));
+    say(&format!(
+        "  after warm-up (last 80 % of samples): RSS {lo:.1}–{hi:.1} MiB, spread {:.1} %",
+        100.0 * (hi - lo) / lo.max(1e-9)
+    ));
+    say(&format!(
+        "  reader blocked on the full channel for {:.1} s of {:.1} s (backpressure)",
+        stats.blocked_time.as_secs_f64(),
+        seconds
+    ));
     Ok(())
 }
 
 fn proc_status_kib(key: &str) -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with(key)).and_then(|l| l.split_whitespace().nth(1)?.parse().ok()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with(key))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse().ok())
+        })
         .unwrap_or(f64::NAN)
 }
 

@@ -10,10 +10,10 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::Context as _;
+use catmap::MapperConfig;
 use catmap::dataset::FrameSource;
 use catmap::stream::{FrameStream, stream_positions};
 use catmap::synth::{Preset, SyntheticScene};
-use catmap::MapperConfig;
 use catmap_systems::Mapper;
 use clap::Parser;
 
@@ -39,8 +39,12 @@ fn main() -> anyhow::Result<()> {
     let args = Args::parse();
     let builder = rerun::RecordingStreamBuilder::new("catmap_live");
     let rec = match &args.save {
-        Some(path) => builder.save(path).with_context(|| format!("cannot write {}", path.display()))?,
-        None => builder.connect_grpc_opts(args.addr.clone()).with_context(|| format!("no Rerun viewer at {}", args.addr))?,
+        Some(path) => builder
+            .save(path)
+            .with_context(|| format!("cannot write {}", path.display()))?,
+        None => builder
+            .connect_grpc_opts(args.addr.clone())
+            .with_context(|| format!("no Rerun viewer at {}", args.addr))?,
     };
     run(&rec, &args)
 }
@@ -48,7 +52,10 @@ fn main() -> anyhow::Result<()> {
 fn run(rec: &rerun::RecordingStream, args: &Args) -> anyhow::Result<()> {
     let preset = if args.small { Preset::Small } else { Preset::Default };
     let scene: Arc<dyn FrameSource> = Arc::new(SyntheticScene::generate(args.seed, preset)?);
-    let config = MapperConfig { seed: args.seed, ..MapperConfig::default() };
+    let config = MapperConfig {
+        seed: args.seed,
+        ..MapperConfig::default()
+    };
     let positions = stream_positions(scene.len(), 1, None);
     let stream = FrameStream::spawn(scene, positions, config.stream.channel_capacity);
     let mut mapper = Mapper::with_inbox(config, stream.receiver.clone())?;
@@ -56,6 +63,10 @@ fn run(rec: &rerun::RecordingStream, args: &Args) -> anyhow::Result<()> {
     mapper.run_to_end(|frames| tracing::debug!(frames, "mapped"));
     stream.join();
     let map = mapper.finish();
-    tracing::info!(objects = map.objects.len(), frames = map.frames_ingested, "streamed to Rerun");
+    tracing::info!(
+        objects = map.objects.len(),
+        frames = map.frames_ingested,
+        "streamed to Rerun"
+    );
     Ok(())
 }

@@ -32,7 +32,10 @@ fn main() -> anyhow::Result<()> {
 
 fn run(args: &Args) -> anyhow::Result<()> {
     let scene = SyntheticScene::generate(args.seed, Preset::Small)?;
-    let config = MapperConfig { seed: args.seed, ..MapperConfig::default() };
+    let config = MapperConfig {
+        seed: args.seed,
+        ..MapperConfig::default()
+    };
     let mut mapper = Mapper::new(config)?;
     let mut previous: BTreeMap<ObjectId, (usize, usize)> = BTreeMap::new();
     let frames = args.max_frames.unwrap_or(scene.len()).min(scene.len());
@@ -58,16 +61,26 @@ fn run(args: &Args) -> anyhow::Result<()> {
             }
             previous.insert(object.id, (object.cloud_points, object.keyframes.len()));
         }
-        say(&format!("frame {index:>3}: {} objects | {}", map.objects.len(), changes.join(", ")));
+        say(&format!(
+            "frame {index:>3}: {} objects | {}",
+            map.objects.len(),
+            changes.join(", ")
+        ));
     }
     mapper.end_stream();
     mapper.step();
     let map = mapper.finish();
     say("\nobject  class        frames  points  box (m)");
     for o in &map.objects {
-        let extents = o.bounds.map(|b| b.extents()).map_or("-".to_owned(), |e| format!("{:.2} × {:.2} × {:.2}", e.x, e.y, e.z));
+        let extents = o
+            .bounds
+            .map(|b| b.extents())
+            .map_or("-".to_owned(), |e| format!("{:.2} × {:.2} × {:.2}", e.x, e.y, e.z));
         let name = replica_name(o.class).unwrap_or("?");
-        say(&format!("{:>6}  {name:<11} {:>6}  {:>6}  {extents}", o.id, o.visible_frames, o.cloud_points));
+        say(&format!(
+            "{:>6}  {name:<11} {:>6}  {:>6}  {extents}",
+            o.id, o.visible_frames, o.cloud_points
+        ));
     }
     Ok(())
 }

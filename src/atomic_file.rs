@@ -49,7 +49,10 @@ mod tests {
         let dir = tempfile::tempdir().expect("temp dir");
         let path = dir.path().join("out.json");
         let err = write_atomic_with(&path, |_| Err(std::io::Error::other("disk full"))).expect_err("must fail");
-        assert!(err.to_string().contains("out.json") && err.to_string().contains("disk full"), "{err}");
+        assert!(
+            err.to_string().contains("out.json") && err.to_string().contains("disk full"),
+            "{err}"
+        );
         assert!(!path.exists() && !temp_path_for(&path).exists());
     }
 

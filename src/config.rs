@@ -39,7 +39,12 @@ pub struct StreamConfig {
 
 impl Default for StreamConfig {
     fn default() -> Self {
-        Self { channel_capacity: 8, frames_per_tick: 1, stride: 1, max_frames: None }
+        Self {
+            channel_capacity: 8,
+            frames_per_tick: 1,
+            stride: 1,
+            max_frames: None,
+        }
     }
 }
 
@@ -55,7 +60,10 @@ pub struct DatasetConfig {
 
 impl Default for DatasetConfig {
     fn default() -> Self {
-        Self { depth_scale: 1000.0, max_depth_m: 8.0 }
+        Self {
+            depth_scale: 1000.0,
+            max_depth_m: 8.0,
+        }
     }
 }
 
@@ -111,7 +119,11 @@ pub struct KeyframeConfig {
 
 impl Default for KeyframeConfig {
     fn default() -> Self {
-        Self { capacity: 20, object_stride: 25, background_stride: 50 }
+        Self {
+            capacity: 20,
+            object_stride: 25,
+            background_stride: 50,
+        }
     }
 }
 
@@ -133,7 +145,13 @@ pub struct RerunConfig {
 
 impl Default for RerunConfig {
     fn default() -> Self {
-        Self { image_downscale: 2, image_every: 1, jpeg_quality: 80, max_points_per_object: 8_000, cloud_log_growth: 0.25 }
+        Self {
+            image_downscale: 2,
+            image_every: 1,
+            jpeg_quality: 80,
+            max_points_per_object: 8_000,
+            cloud_log_growth: 0.25,
+        }
     }
 }
 
@@ -171,7 +189,10 @@ impl MapperConfig {
         if self.keyframes.object_stride == 0 || self.keyframes.background_stride == 0 {
             return bad("keyframe strides must be at least 1");
         }
-        if !(self.objects.cloud_voxel_m > 0.0 && self.objects.bounds_voxel_m > 0.0 && self.objects.background_voxel_m > 0.0) {
+        if !(self.objects.cloud_voxel_m > 0.0
+            && self.objects.bounds_voxel_m > 0.0
+            && self.objects.background_voxel_m > 0.0)
+        {
             return bad("voxel sizes must be positive");
         }
         if self.rerun.image_downscale == 0 || self.rerun.image_every == 0 {
@@ -190,7 +211,10 @@ mod tests {
         let config = MapperConfig::from_toml("seed = 7\n[keyframes]\nobject_stride = 5\n").expect("valid");
         assert_eq!(config.seed, 7);
         assert_eq!(config.keyframes.object_stride, 5);
-        assert_eq!(config.keyframes.capacity, 20, "untouched fields keep the paper's default");
+        assert_eq!(
+            config.keyframes.capacity, 20,
+            "untouched fields keep the paper's default"
+        );
     }
 
     #[test]
@@ -202,7 +226,10 @@ mod tests {
     #[test]
     fn printed_defaults_parse_back_to_the_defaults() {
         let text = MapperConfig::default().to_toml();
-        assert_eq!(MapperConfig::from_toml(&text).expect("round trip"), MapperConfig::default());
+        assert_eq!(
+            MapperConfig::from_toml(&text).expect("round trip"),
+            MapperConfig::default()
+        );
     }
 
     #[test]

@@ -51,12 +51,18 @@ pub enum CatmapError {
 impl CatmapError {
     /// Wraps an I/O error with the path it concerns.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        Self::Io { path: path.into(), source }
+        Self::Io {
+            path: path.into(),
+            source,
+        }
     }
 
     /// A layout error for `path`.
     pub fn layout(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
-        Self::Layout { path: path.into(), reason: reason.into() }
+        Self::Layout {
+            path: path.into(),
+            reason: reason.into(),
+        }
     }
 }
 

@@ -29,7 +29,14 @@ pub struct CameraIntrinsics {
 
 impl CameraIntrinsics {
     /// Replica's camera as the vMAP layout assumes it: 1200×680, f = 600, c = (599.5, 339.5).
-    pub const REPLICA: Self = Self { width: 1200, height: 680, fx: 600.0, fy: 600.0, cx: 599.5, cy: 339.5 };
+    pub const REPLICA: Self = Self {
+        width: 1200,
+        height: 680,
+        fx: 600.0,
+        fy: 600.0,
+        cx: 599.5,
+        cy: 339.5,
+    };
 
     /// Number of pixels.
     pub fn pixel_count(&self) -> usize {
@@ -95,12 +102,16 @@ impl InstanceMask {
 
     /// An all-background mask of `pixel_count` pixels.
     pub fn background(pixel_count: usize) -> Self {
-        Self { codes: vec![Self::BACKGROUND; pixel_count] }
+        Self {
+            codes: vec![Self::BACKGROUND; pixel_count],
+        }
     }
 
     /// Builds a mask from per-pixel labels.
     pub fn from_labels(labels: impl IntoIterator<Item = InstanceLabel>) -> Self {
-        Self { codes: labels.into_iter().map(Self::encode).collect() }
+        Self {
+            codes: labels.into_iter().map(Self::encode).collect(),
+        }
     }
 
     fn encode(label: InstanceLabel) -> u32 {
@@ -108,7 +119,10 @@ impl InstanceMask {
             InstanceLabel::Background => Self::BACKGROUND,
             InstanceLabel::Unknown => Self::UNKNOWN,
             InstanceLabel::Object(ObjectId(id)) => {
-                debug_assert!(id != Self::BACKGROUND && id != Self::UNKNOWN, "object id {id} is reserved");
+                debug_assert!(
+                    id != Self::BACKGROUND && id != Self::UNKNOWN,
+                    "object id {id} is reserved"
+                );
                 id
             }
         }
@@ -220,7 +234,14 @@ mod tests {
 
     #[test]
     fn project_inverts_back_projection() {
-        let k = CameraIntrinsics { width: 160, height: 120, fx: 100.0, fy: 110.0, cx: 79.5, cy: 59.5 };
+        let k = CameraIntrinsics {
+            width: 160,
+            height: 120,
+            fx: 100.0,
+            fy: 110.0,
+            cx: 79.5,
+            cy: 59.5,
+        };
         let p = k.point_in_camera(12.0, 97.0, 2.5);
         let (u, v) = k.project(&p).expect("point is in front of the camera");
         assert!((u - 12.0).abs() < 1e-4 && (v - 97.0).abs() < 1e-4, "got ({u}, {v})");
@@ -229,7 +250,11 @@ mod tests {
 
     #[test]
     fn instance_mask_round_trips_every_label() {
-        let labels = [InstanceLabel::Background, InstanceLabel::Object(ObjectId(7)), InstanceLabel::Unknown];
+        let labels = [
+            InstanceLabel::Background,
+            InstanceLabel::Object(ObjectId(7)),
+            InstanceLabel::Unknown,
+        ];
         let mask = InstanceMask::from_labels(labels);
         for (i, label) in labels.iter().enumerate() {
             assert_eq!(mask.label(i), *label, "pixel {i}");
@@ -239,7 +264,14 @@ mod tests {
 
     #[test]
     fn scaled_intrinsics_keep_pixel_centres_aligned() {
-        let k = CameraIntrinsics { width: 640, height: 480, fx: 500.0, fy: 500.0, cx: 319.5, cy: 239.5 };
+        let k = CameraIntrinsics {
+            width: 640,
+            height: 480,
+            fx: 500.0,
+            fy: 500.0,
+            cx: 319.5,
+            cy: 239.5,
+        };
         let half = k.scaled(0.5);
         assert_eq!((half.width, half.height), (320, 240));
         assert!((half.cx - 159.5).abs() < 1e-6 && (half.cy - 119.5).abs() < 1e-6);

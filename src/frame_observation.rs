@@ -83,7 +83,11 @@ pub fn observe_objects(frame: &RgbdFrame, cfg: &ObjectConfig) -> FrameObservatio
         }
         big_enough
     });
-    FrameObservation { objects, ignored_small, background_pixels }
+    FrameObservation {
+        objects,
+        ignored_small,
+        background_pixels,
+    }
 }
 
 /// Pixels, box and votes of one object while the frame is scanned.
@@ -95,7 +99,11 @@ struct Accumulator {
 
 impl Accumulator {
     fn starting_at(u: u32, v: u32) -> Self {
-        Self { pixels: Vec::new(), tight_box: PixelBox::at(u, v), class_votes: Vec::new() }
+        Self {
+            pixels: Vec::new(),
+            tight_box: PixelBox::at(u, v),
+            class_votes: Vec::new(),
+        }
     }
 
     #[inline]
@@ -111,7 +119,10 @@ impl Accumulator {
 
 /// The class with the most votes; ties go to the smaller class id. `None` without votes.
 pub fn majority_class(votes: &BTreeMap<ClassId, u64>) -> Option<ClassId> {
-    votes.iter().max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0))).map(|(&class, _)| class)
+    votes
+        .iter()
+        .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+        .map(|(&class, _)| class)
 }
 
 #[cfg(test)]
@@ -127,7 +138,14 @@ mod tests {
         RgbdFrame {
             index: FrameIndex(0),
             world_from_camera: Isometry3::identity(),
-            intrinsics: CameraIntrinsics { width, height, fx: 10.0, fy: 10.0, cx: 1.0, cy: 1.0 },
+            intrinsics: CameraIntrinsics {
+                width,
+                height,
+                fx: 10.0,
+                fy: 10.0,
+                cx: 1.0,
+                cy: 1.0,
+            },
             rgb: vec![[0; 3]; labels.len()],
             depth_m: vec![1.0; labels.len()],
             instances: InstanceMask::from_labels(labels.iter().copied()),
@@ -141,11 +159,23 @@ mod tests {
         let a = O(ObjectId(3));
         let labels = [B, a, a, B, B, a, B, B, B];
         let classes = [0, 20, 20, 0, 0, 80, 0, 0, 0];
-        let cfg = ObjectConfig { min_box_side_px: 0, background_pixel_stride: 1, ..ObjectConfig::default() };
+        let cfg = ObjectConfig {
+            min_box_side_px: 0,
+            background_pixel_stride: 1,
+            ..ObjectConfig::default()
+        };
         let obs = observe_objects(&frame_with(&labels, &classes, 3), &cfg);
         let chair = &obs.objects[&ObjectId(3)];
         assert_eq!(chair.pixels, [1, 2, 5]);
-        assert_eq!(chair.tight_box, PixelBox { u_min: 1, v_min: 0, u_max: 2, v_max: 1 });
+        assert_eq!(
+            chair.tight_box,
+            PixelBox {
+                u_min: 1,
+                v_min: 0,
+                u_max: 2,
+                v_max: 1
+            }
+        );
         assert_eq!(chair.class_votes[&ClassId(20)], 2);
         assert_eq!(obs.background_pixels, [0, 3, 4, 6, 7, 8]);
     }

@@ -69,7 +69,12 @@ pub struct KeyframeWindow<T> {
 
 impl<T> Default for KeyframeWindow<T> {
     fn default() -> Self {
-        Self { slots: Vec::new(), live: 0, recent: Vec::new(), visible_count: 0 }
+        Self {
+            slots: Vec::new(),
+            live: 0,
+            recent: Vec::new(),
+            visible_count: 0,
+        }
     }
 }
 
@@ -83,7 +88,10 @@ impl<T> KeyframeWindow<T> {
         cfg: &KeyframeConfig,
         rng: &mut impl Rng,
     ) -> Admission {
-        debug_assert!(cfg.capacity >= 3, "capacity must leave room beside the two recent keyframes");
+        debug_assert!(
+            cfg.capacity >= 3,
+            "capacity must leave room beside the two recent keyframes"
+        );
         let stride = u64::from(role.stride(cfg).max(1));
         let is_keyframe = self.visible_count.is_multiple_of(stride) || self.slots.len() == 1;
         self.visible_count += 1;
@@ -100,7 +108,10 @@ impl<T> KeyframeWindow<T> {
             self.mark_recent(self.live);
             self.live = self.draw_replaceable_slot(rng);
         }
-        Admission::Overwrote { replaced, keyframe: is_keyframe }
+        Admission::Overwrote {
+            replaced,
+            keyframe: is_keyframe,
+        }
     }
 
     fn mark_recent(&mut self, slot: usize) {
@@ -164,28 +175,56 @@ mod tests {
 
     #[test]
     fn first_two_frames_are_keyframes_and_later_ones_overwrite_the_live_slot() {
-        let cfg = KeyframeConfig { capacity: 5, object_stride: 4, background_stride: 8 };
+        let cfg = KeyframeConfig {
+            capacity: 5,
+            object_stride: 4,
+            background_stride: 8,
+        };
         let mut window = KeyframeWindow::default();
         offer_all(&mut window, 0..4, &cfg);
-        assert_eq!(window.frames(), [0, 3].map(FrameIndex), "frames 2 and 3 overwrite slot 1");
+        assert_eq!(
+            window.frames(),
+            [0, 3].map(FrameIndex),
+            "frames 2 and 3 overwrite slot 1"
+        );
         offer_all(&mut window, 4..6, &cfg);
-        assert_eq!(window.frames(), [0, 3, 5].map(FrameIndex), "visible frame 4 is a keyframe");
+        assert_eq!(
+            window.frames(),
+            [0, 3, 5].map(FrameIndex),
+            "visible frame 4 is a keyframe"
+        );
     }
 
     #[test]
     fn a_full_window_keeps_its_size_and_the_two_newest_keyframes() {
-        let cfg = KeyframeConfig { capacity: 4, object_stride: 2, background_stride: 2 };
+        let cfg = KeyframeConfig {
+            capacity: 4,
+            object_stride: 2,
+            background_stride: 2,
+        };
         let mut window = KeyframeWindow::default();
         offer_all(&mut window, 0..40, &cfg);
         assert_eq!(window.len(), 4, "capacity bounds the window");
-        let recent: Vec<u64> = window.recent_slots().iter().map(|&s| window.slots()[s].frame.0).collect();
-        assert_eq!(recent, [36, 38], "the two newest keyframes (every 2nd frame) are remembered as recent");
+        let recent: Vec<u64> = window
+            .recent_slots()
+            .iter()
+            .map(|&s| window.slots()[s].frame.0)
+            .collect();
+        assert_eq!(
+            recent,
+            [36, 38],
+            "the two newest keyframes (every 2nd frame) are remembered as recent"
+        );
         assert_eq!(window.visible_count(), 40);
     }
 
     #[test]
     fn the_background_uses_its_own_stride() {
-        let cfg = KeyframeConfig { capacity: 10, object_stride: 2, background_stride: 5 };
+        let cfg = KeyframeConfig {
+            capacity: 10,
+            object_stride: 2,
+            background_stride: 5,
+        };
         let mut window = KeyframeWindow::default();
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         for f in 0..11 {
@@ -196,7 +235,11 @@ mod tests {
 
     #[test]
     fn same_seed_same_window() {
-        let cfg = KeyframeConfig { capacity: 4, object_stride: 1, background_stride: 1 };
+        let cfg = KeyframeConfig {
+            capacity: 4,
+            object_stride: 1,
+            background_stride: 1,
+        };
         let (mut a, mut b) = (KeyframeWindow::default(), KeyframeWindow::default());
         offer_all(&mut a, 0..50, &cfg);
         offer_all(&mut b, 0..50, &cfg);

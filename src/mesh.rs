@@ -14,7 +14,7 @@ use std::fs::File;
 use std::io::{BufReader, Write};
 use std::path::Path;
 
-use nalgebra::{Isometry3, Point3, Similarity3};
+use nalgebra::{Isometry3, Point3, Similarity3, Vector3};
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{Property, PropertyAccess, PropertyAccessResult};
 use rand::{Rng, RngExt};
@@ -45,16 +45,16 @@ pub struct Aabb {
 impl Aabb {
     /// The smallest box holding all `points`, or `None` when there are none.
     pub fn from_points<'a>(points: impl IntoIterator<Item = &'a Point3<f32>>) -> Option<Self> {
-        points.into_iter().fold(None, |acc, p| {
-            Some(match acc {
-                None => Self { min: *p, max: *p },
-                Some(b) => Self { min: b.min.inf(p), max: b.max.sup(p) },
-            })
-        })
+        let mut points = points.into_iter();
+        let first = *points.next()?;
+        Some(points.fold(Self { min: first, max: first }, |b, p| Self {
+            min: b.min.inf(p),
+            max: b.max.sup(p),
+        }))
     }
 
     /// Side lengths along x, y and z.
-    pub fn extent(&self) -> nalgebra::Vector3<f32> {
+    pub fn extent(&self) -> Vector3<f32> {
         self.max - self.min
     }
 
@@ -70,7 +70,11 @@ const DEFAULT_GREY: [u8; 3] = [128, 128, 128];
 impl TriangleMesh {
     /// An uncoloured mesh.
     pub fn new(vertices: Vec<Point3<f32>>, triangles: Vec<[u32; 3]>) -> Self {
-        Self { vertices, triangles, colors: None }
+        Self {
+            vertices,
+            triangles,
+            colors: None,
+        }
     }
 
     /// The same mesh with every vertex painted `rgb`.
@@ -130,7 +134,8 @@ impl TriangleMesh {
             }
         };
         self.vertices.extend_from_slice(&other.vertices);
-        self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + offset)));
+        self.triangles
+            .extend(other.triangles.iter().map(|t| t.map(|i| i + offset)));
     }
 
     /// All `meshes` merged into one.
@@ -154,7 +159,9 @@ impl TriangleMesh {
 
     /// Total surface area.
     pub fn area(&self) -> f32 {
-        (0..self.triangles.len()).map(|t| f64::from(self.triangle_area(t))).sum::<f64>() as f32
+        (0..self.triangles.len())
+            .map(|t| f64::from(self.triangle_area(t)))
+            .sum::<f64>() as f32
     }
 
     /// Axis-aligned bounds of the vertices, or `None` for a mesh without vertices.
@@ -164,12 +171,13 @@ impl TriangleMesh {
 
     /// `count` points drawn uniformly over the surface with `rng`. Errors when the mesh has no area.
     pub fn sample_surface<R: Rng + ?Sized>(&self, count: usize, rng: &mut R) -> Result<Vec<Point3<f32>>> {
-        let mut cumulative = Vec::with_capacity(self.triangles.len());
-        let mut total = 0.0_f64;
-        for t in 0..self.triangles.len() {
-            total += f64::from(self.triangle_area(t));
-            cumulative.push(total);
-        }
+        let cumulative: Vec<f64> = (0..self.triangles.len())
+            .scan(0.0, |acc, t| {
+                *acc += f64::from(self.triangle_area(t));
+                Some(*acc)
+            })
+            .collect();
+        let total = cumulative.last().copied().unwrap_or(0.0);
         if count > 0 && !(total > 0.0 && total.is_finite()) {
             return Err(CatmapError::Degenerate(format!(
                 "cannot sample a mesh of area {total} ({} triangles)",
@@ -234,11 +242,23 @@ impl TriangleMesh {
     /// properties are ignored. Errors name `path` and what is wrong.
     pub fn read_ply(path: &Path) -> Result<Self> {
         let file = File::open(path).map_err(|e| CatmapError::io(path, e))?;
-        let ply = Parser::<PlyRecord>::new().read_ply(&mut BufReader::new(file)).map_err(|e| {
-            CatmapError::Parse { path: path.to_owned(), line: e.line().unwrap_or(0), reason: e.to_string() }
-        })?;
-        let bad = |reason: String| CatmapError::Parse { path: path.to_owned(), line: 0, reason };
-        let vertex_def = ply.header.elements.get("vertex").ok_or_else(|| bad("no vertex element".into()))?;
+        let ply = Parser::<PlyRecord>::new()
+            .read_ply(&mut BufReader::new(file))
+            .map_err(|e| CatmapError::Parse {
+                path: path.to_owned(),
+                line: e.line().unwrap_or(0),
+                reason: e.to_string(),
+            })?;
+        let bad = |reason: String| CatmapError::Parse {
+            path: path.to_owned(),
+            line: 0,
+            reason,
+        };
+        let vertex_def = ply
+            .header
+            .elements
+            .get("vertex")
+            .ok_or_else(|| bad("no vertex element".into()))?;
         let has = |name: &str| vertex_def.properties.contains_key(name);
         if !(has("x") && has("y") && has("z")) {
             return Err(bad("vertex element lacks x, y or z".into()));
@@ -246,8 +266,8 @@ impl TriangleMesh {
         let empty = Vec::new();
         let vertex_records = ply.payload.get("vertex").unwrap_or(&empty);
         let vertices: Vec<_> = vertex_records.iter().map(|r| Point3::from(r.xyz)).collect();
-        let colors = (has("red") && has("green") && has("blue"))
-            .then(|| vertex_records.iter().map(|r| r.rgb).collect());
+        let colors =
+            (has("red") && has("green") && has("blue")).then(|| vertex_records.iter().map(|r| r.rgb).collect());
         let mut triangles = Vec::new();
         for (f, face) in ply.payload.get("face").unwrap_or(&empty).iter().enumerate() {
             if face.indices.len() < 3 {
@@ -259,7 +279,11 @@ impl TriangleMesh {
             let i0 = face.indices[0];
             triangles.extend(face.indices[1..].windows(2).map(|w| [i0, w[0], w[1]]));
         }
-        Ok(Self { vertices, triangles, colors })
+        Ok(Self {
+            vertices,
+            triangles,
+            colors,
+        })
     }
 }
 
@@ -287,7 +311,11 @@ impl PropertyAccess for PlyRecord {
             "vertex_indices" | "vertex_index" => store(&mut self.indices, property.to_u32_list()),
             _ => return PropertyAccessResult::Ignored,
         };
-        if stored { PropertyAccessResult::Set } else { PropertyAccessResult::UnsupportedType }
+        if stored {
+            PropertyAccessResult::Set
+        } else {
+            PropertyAccessResult::UnsupportedType
+        }
     }
 }
 
@@ -299,7 +327,7 @@ fn store<T>(slot: &mut T, value: Option<T>) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::{Translation3, UnitQuaternion, Vector3};
+    use nalgebra::{Translation3, UnitQuaternion};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
@@ -324,8 +352,15 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         let points = mesh.sample_surface(20_000, &mut rng).expect("mesh has area");
         let left = points.iter().filter(|p| p.x < 1.5).count() as f32 / points.len() as f32;
-        assert!((left - 0.5).abs() < 0.02, "half the samples lie left of x = 1.5, got {left}");
-        assert!(points.iter().all(|p| p.x >= 0.0 && p.x <= 3.0 && p.y >= 0.0 && p.y <= 1.0));
+        assert!(
+            (left - 0.5).abs() < 0.02,
+            "half the samples lie left of x = 1.5, got {left}"
+        );
+        assert!(
+            points
+                .iter()
+                .all(|p| p.x >= 0.0 && p.x <= 3.0 && p.y >= 0.0 && p.y <= 1.0)
+        );
     }
 
     #[test]
@@ -362,7 +397,10 @@ mod tests {
             let path = dir.path().join("m.ply");
             mesh.write_ply(&path).expect("write");
             assert_eq!(TriangleMesh::read_ply(&path).expect("read"), mesh);
-            assert!(!path.with_extension("ply.tmp").exists(), "temporary file is renamed away");
+            assert!(
+                !path.with_extension("ply.tmp").exists(),
+                "temporary file is renamed away"
+            );
         }
     }
 
@@ -382,9 +420,8 @@ mod tests {
     fn corrupt_ply_files_are_errors_naming_the_file() {
         let dir = tempfile::tempdir().expect("temp dir");
         let path = dir.path().join("bad.ply");
-        let mut bytes = Vec::new();
         unit_square().write_ply(&path).expect("write");
-        bytes.extend(std::fs::read(&path).expect("read back"));
+        let bytes = std::fs::read(&path).expect("read back");
         let cases: [&[u8]; 4] = [
             &bytes[..bytes.len() - 5], // truncated payload
             b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n",
@@ -395,7 +432,10 @@ mod tests {
         for (k, case) in cases.iter().enumerate() {
             std::fs::write(&path, case).expect("write case");
             let err = TriangleMesh::read_ply(&path).expect_err("corrupt file must fail");
-            assert!(err.to_string().contains("bad.ply"), "case {k}: error names the file: {err}");
+            assert!(
+                err.to_string().contains("bad.ply"),
+                "case {k}: error names the file: {err}"
+            );
         }
         let missing = TriangleMesh::read_ply(&dir.path().join("missing.ply")).expect_err("no file");
         assert!(matches!(missing, CatmapError::Io { .. }));

@@ -27,7 +27,9 @@ impl PointIndex {
             return Err(CatmapError::Degenerate("cannot index an empty point set".to_owned()));
         }
         if points.iter().any(|p| !p.coords.iter().all(|x| x.is_finite())) {
-            return Err(CatmapError::Degenerate("point set has a NaN or infinite coordinate".to_owned()));
+            return Err(CatmapError::Degenerate(
+                "point set has a NaN or infinite coordinate".to_owned(),
+            ));
         }
         let raw: Vec<[f32; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
         let tree = ImmutableKdTree::new_from_slice(&raw)
@@ -37,7 +39,12 @@ impl PointIndex {
 
     /// Distance from `p` to the closest indexed point.
     pub fn nearest_distance(&self, p: &Point3<f32>) -> f32 {
-        self.tree.query(&[p.x, p.y, p.z]).nearest_one::<SquaredEuclidean<f32>>().execute().distance.sqrt()
+        self.tree
+            .query(&[p.x, p.y, p.z])
+            .nearest_one::<SquaredEuclidean<f32>>()
+            .execute()
+            .distance
+            .sqrt()
     }
 
     /// Distances from each query point to the closest indexed point (in parallel, in query order).
@@ -61,9 +68,15 @@ mod tests {
 
     #[test]
     fn distances_match_brute_force() {
-        let reference: Vec<Point3<f32>> = (0..200).map(|i| Point3::new((i % 10) as f32, (i / 10) as f32 * 0.5, 0.3)).collect();
+        let reference: Vec<Point3<f32>> = (0..200)
+            .map(|i| Point3::new((i % 10) as f32, (i / 10) as f32 * 0.5, 0.3))
+            .collect();
         let index = PointIndex::new(&reference).expect("non-empty");
-        for q in [Point3::new(0.2, 0.1, 0.0), Point3::new(7.7, 3.3, 1.0), Point3::new(-5.0, 20.0, 0.3)] {
+        for q in [
+            Point3::new(0.2, 0.1, 0.0),
+            Point3::new(7.7, 3.3, 1.0),
+            Point3::new(-5.0, 20.0, 0.3),
+        ] {
             let brute = reference.iter().map(|r| (r - q).norm()).fold(f32::INFINITY, f32::min);
             assert!((index.nearest_distance(&q) - brute).abs() < 1e-5);
         }

@@ -81,7 +81,15 @@ impl ObjectView {
                 states.push(owner.state_of(frame.instances.label(i)));
             }
         }
-        Self { frame: frame.index, world_from_camera: frame.world_from_camera, intrinsics: k, region, rgb, depth_m, states }
+        Self {
+            frame: frame.index,
+            world_from_camera: frame.world_from_camera,
+            intrinsics: k,
+            region,
+            rgb,
+            depth_m,
+            states,
+        }
     }
 
     /// Index into the crop's arrays of full-frame pixel `(u, v)`, if inside the region.
@@ -111,19 +119,44 @@ mod tests {
         let frame = RgbdFrame {
             index: FrameIndex(9),
             world_from_camera: Isometry3::identity(),
-            intrinsics: CameraIntrinsics { width: 3, height: 2, fx: 1.0, fy: 1.0, cx: 1.0, cy: 1.0 },
+            intrinsics: CameraIntrinsics {
+                width: 3,
+                height: 2,
+                fx: 1.0,
+                fy: 1.0,
+                cx: 1.0,
+                cy: 1.0,
+            },
             rgb: (0..6).map(|i| [i as u8; 3]).collect(),
             depth_m: (0..6).map(|i| i as f32).collect(),
             instances: InstanceMask::from_labels(labels),
             classes: vec![ClassId(0); 6],
         };
-        let view = ObjectView::crop(&frame, PixelBox { u_min: 1, v_min: 0, u_max: 2, v_max: 1 }, ViewOwner::Object(me));
+        let view = ObjectView::crop(
+            &frame,
+            PixelBox {
+                u_min: 1,
+                v_min: 0,
+                u_max: 2,
+                v_max: 1,
+            },
+            ViewOwner::Object(me),
+        );
         assert_eq!(view.depth_m, [1.0, 2.0, 4.0, 5.0]);
         use PixelState::{OtherObject as X, ThisObject as T};
         assert_eq!(view.states, [T, X, T, X]);
         assert_eq!(view.index_of(2, 1), Some(3));
         assert_eq!(view.index_of(0, 0), None);
-        let background = ObjectView::crop(&frame, PixelBox { u_min: 0, v_min: 0, u_max: 2, v_max: 1 }, ViewOwner::Background);
+        let background = ObjectView::crop(
+            &frame,
+            PixelBox {
+                u_min: 0,
+                v_min: 0,
+                u_max: 2,
+                v_max: 1,
+            },
+            ViewOwner::Background,
+        );
         assert_eq!(background.states[0], T, "background pixels belong to the background");
         assert_eq!(background.states[3], PixelState::Unknown);
     }

@@ -54,7 +54,11 @@ impl ObservedCloud {
     /// An empty cloud on a grid of `voxel_m` metres.
     pub fn new(voxel_m: f32) -> Self {
         debug_assert!(voxel_m > 0.0, "voxel edge must be positive");
-        Self { voxel_m, voxels: HashMap::default(), points_added: 0 }
+        Self {
+            voxel_m,
+            voxels: HashMap::default(),
+            points_added: 0,
+        }
     }
 
     /// Edge of the voxel grid, metres.
@@ -66,7 +70,10 @@ impl ObservedCloud {
     #[inline]
     pub fn add_point(&mut self, p: &Point3<f32>) {
         let key = voxel_key(p, 1.0 / self.voxel_m);
-        let v = self.voxels.entry(key).or_insert(VoxelSum { sum: Vector3::zeros(), count: 0 });
+        let v = self.voxels.entry(key).or_insert(VoxelSum {
+            sum: Vector3::zeros(),
+            count: 0,
+        });
         v.sum += p.coords.cast::<f64>();
         v.count += 1;
         self.points_added += 1;
@@ -135,7 +142,11 @@ mod tests {
         assert_eq!(cloud.len(), 2);
         assert_eq!(cloud.points_added(), 3);
         let points = cloud.points();
-        assert!(points.iter().any(|p| (p - Point3::new(0.002, 0.003, 0.004)).norm() < 1e-6));
+        assert!(
+            points
+                .iter()
+                .any(|p| (p - Point3::new(0.002, 0.003, 0.004)).norm() < 1e-6)
+        );
     }
 
     #[test]
@@ -148,7 +159,9 @@ mod tests {
 
     #[test]
     fn the_point_order_does_not_depend_on_insertion_order() {
-        let pts: Vec<Point3<f32>> = (0..50).map(|i| Point3::new(i as f32 * 0.03, (i % 7) as f32 * 0.1, 0.0)).collect();
+        let pts: Vec<Point3<f32>> = (0..50)
+            .map(|i| Point3::new(i as f32 * 0.03, (i % 7) as f32 * 0.1, 0.0))
+            .collect();
         let mut reversed = pts.clone();
         reversed.reverse();
         assert_eq!(voxel_downsample(&pts, 0.02), voxel_downsample(&reversed, 0.02));

@@ -65,12 +65,19 @@ impl OrientedBox {
 /// the two others with a non-negative world-x component. Errors on an empty or non-finite cloud.
 pub fn fit_minimum_volume_box(points: &[Point3<f32>]) -> Result<OrientedBox> {
     if points.is_empty() {
-        return Err(CatmapError::Degenerate("cannot fit a box to an empty point cloud".to_owned()));
+        return Err(CatmapError::Degenerate(
+            "cannot fit a box to an empty point cloud".to_owned(),
+        ));
     }
     if points.iter().any(|p| !p.coords.iter().all(|x| x.is_finite())) {
-        return Err(CatmapError::Degenerate("point cloud has a NaN or infinite coordinate".to_owned()));
+        return Err(CatmapError::Degenerate(
+            "point cloud has a NaN or infinite coordinate".to_owned(),
+        ));
     }
-    let mean = points.iter().fold(Vector3::zeros(), |acc, p| acc + p.coords.cast::<f64>()) / points.len() as f64;
+    let mean = points
+        .iter()
+        .fold(Vector3::zeros(), |acc, p| acc + p.coords.cast::<f64>())
+        / points.len() as f64;
     let centred: Vec<Vector3<f64>> = points.iter().map(|p| p.coords.cast::<f64>() - mean).collect();
 
     // The box only depends on the convex hull: search on the points that are extreme in some
@@ -116,7 +123,8 @@ impl AxisFit {
     fn into_box(self, mean: Vector3<f64>) -> OrientedBox {
         let local_centre = (self.min + self.max) * 0.5;
         let half = (self.max - self.min) * 0.5;
-        let centre = mean + self.axes[0] * local_centre.x + self.axes[1] * local_centre.y + self.axes[2] * local_centre.z;
+        let centre =
+            mean + self.axes[0] * local_centre.x + self.axes[1] * local_centre.y + self.axes[2] * local_centre.z;
         let (axes, half) = canonical_axes(self.axes, half);
         let rotation = Rotation3::from_basis_unchecked(&axes.map(|a| a.cast::<f32>()));
         OrientedBox {
@@ -131,7 +139,9 @@ impl AxisFit {
 
 /// Reorders and flips box axes: z closest to world up, x the longer remaining one, right-handed.
 fn canonical_axes(axes: [Vector3<f64>; 3], half: Vector3<f64>) -> ([Vector3<f64>; 3], Vector3<f64>) {
-    let up = (0..3).max_by(|&a, &b| axes[a].z.abs().total_cmp(&axes[b].z.abs())).expect("three axes");
+    let up = (0..3)
+        .max_by(|&a, &b| axes[a].z.abs().total_cmp(&axes[b].z.abs()))
+        .expect("three axes");
     let (i, j) = match up {
         0 => (1, 2),
         1 => (0, 2),
@@ -184,8 +194,11 @@ pub fn convex_hull_2d(mut points: Vec<Vector2<f64>>) -> Vec<Vector2<f64>> {
     let mut hull: Vec<Vector2<f64>> = Vec::with_capacity(2 * points.len());
     for pass in 0..2 {
         let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &Vector2<f64>>> =
-            if pass == 0 { Box::new(points.iter()) } else { Box::new(points.iter().rev()) };
+        let iter: Box<dyn Iterator<Item = &Vector2<f64>>> = if pass == 0 {
+            Box::new(points.iter())
+        } else {
+            Box::new(points.iter().rev())
+        };
         for p in iter {
             while hull.len() >= start + 2 && cross(&hull[hull.len() - 2], &hull[hull.len() - 1], p) <= 0.0 {
                 hull.pop();
@@ -203,7 +216,11 @@ fn min_area_rectangle(hull: &[Vector2<f64>]) -> (Vector2<f64>, Vector2<f64>, Vec
     let mut best = (f64::INFINITY, Vector2::x(), Vector2::zeros(), Vector2::zeros());
     let n = hull.len();
     for k in 0..n.max(1) {
-        let edge = if n >= 2 { hull[(k + 1) % n] - hull[k] } else { Vector2::x() };
+        let edge = if n >= 2 {
+            hull[(k + 1) % n] - hull[k]
+        } else {
+            Vector2::x()
+        };
         let Some(d) = edge.try_normalize(1e-12) else { continue };
         let perp = Vector2::new(-d.y, d.x);
         let (mut lo, mut hi) = (Vector2::repeat(f64::INFINITY), Vector2::repeat(f64::NEG_INFINITY));
@@ -259,7 +276,9 @@ fn fibonacci_sphere(n: usize) -> Vec<Vector3<f64>> {
 
 /// Principal axes, world z, and the upper half of a Fibonacci sphere.
 fn candidate_axes(points: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
-    let covariance = points.iter().fold(nalgebra::Matrix3::zeros(), |acc, p| acc + p * p.transpose());
+    let covariance = points
+        .iter()
+        .fold(nalgebra::Matrix3::zeros(), |acc, p| acc + p * p.transpose());
     let eigen = covariance.symmetric_eigen();
     let mut axes: Vec<Vector3<f64>> = eigen.eigenvectors.column_iter().map(|c| c.into_owned()).collect();
     axes.push(Vector3::z());
@@ -292,7 +311,11 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         (0..n)
             .map(|_| {
-                let mut p: Vector3<f32> = Vector3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+                let mut p: Vector3<f32> = Vector3::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                );
                 let face = rng.random_range(0..3usize);
                 p[face] = if rng.random::<bool>() { 1.0 } else { -1.0 };
                 pose * Point3::from(p.component_mul(&half))
@@ -307,14 +330,22 @@ mod tests {
         let points = box_surface(&pose, half, 4000, 7);
         let fitted = fit_minimum_volume_box(&points).expect("non-empty cloud");
         let true_volume = 8.0 * half.x * half.y * half.z;
-        assert!(fitted.volume() < true_volume * 1.03, "volume {} vs true {}", fitted.volume(), true_volume);
+        assert!(
+            fitted.volume() < true_volume * 1.03,
+            "volume {} vs true {}",
+            fitted.volume(),
+            true_volume
+        );
         assert!((fitted.center() - pose.translation.vector).coords.norm() < 0.01);
         let mut got: Vec<f32> = fitted.half_extents.iter().copied().collect();
         got.sort_by(f32::total_cmp);
         for (g, t) in got.iter().zip([0.1, 0.25, 0.4]) {
             assert!((g - t).abs() < 0.01, "half extents {got:?}");
         }
-        assert!(points.iter().all(|p| fitted.contains(p, 1e-4)), "every point lies inside");
+        assert!(
+            points.iter().all(|p| fitted.contains(p, 1e-4)),
+            "every point lies inside"
+        );
     }
 
     #[test]
@@ -323,7 +354,10 @@ mod tests {
         let fitted = fit_minimum_volume_box(&box_surface(&pose, Vector3::new(0.2, 0.5, 0.3), 3000, 1)).expect("ok");
         let r = fitted.world_from_box.rotation.to_rotation_matrix();
         assert!(r.matrix().column(2).z > 0.99, "box z points up");
-        assert!(fitted.half_extents.x >= fitted.half_extents.y, "x is the longer horizontal axis");
+        assert!(
+            fitted.half_extents.x >= fitted.half_extents.y,
+            "x is the longer horizontal axis"
+        );
         assert!((r.matrix().determinant() - 1.0).abs() < 1e-5);
     }
 

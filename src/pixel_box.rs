@@ -18,7 +18,12 @@ pub struct PixelBox {
 impl PixelBox {
     /// The box of one pixel.
     pub fn at(u: u32, v: u32) -> Self {
-        Self { u_min: u, v_min: v, u_max: u, v_max: v }
+        Self {
+            u_min: u,
+            v_min: v,
+            u_max: u,
+            v_max: v,
+        }
     }
 
     /// Grows the box to contain pixel `(u, v)`.
@@ -64,15 +69,41 @@ mod tests {
 
     #[test]
     fn enlarging_by_twenty_percent_adds_a_tenth_on_each_side() {
-        let b = PixelBox { u_min: 50, v_min: 20, u_max: 149, v_max: 69 };
+        let b = PixelBox {
+            u_min: 50,
+            v_min: 20,
+            u_max: 149,
+            v_max: 69,
+        };
         let e = b.enlarged(0.2, 640, 480);
-        assert_eq!(e, PixelBox { u_min: 40, v_min: 15, u_max: 159, v_max: 74 });
+        assert_eq!(
+            e,
+            PixelBox {
+                u_min: 40,
+                v_min: 15,
+                u_max: 159,
+                v_max: 74
+            }
+        );
     }
 
     #[test]
     fn enlarging_is_clamped_to_the_image() {
-        let b = PixelBox { u_min: 0, v_min: 0, u_max: 99, v_max: 99 };
+        let b = PixelBox {
+            u_min: 0,
+            v_min: 0,
+            u_max: 99,
+            v_max: 99,
+        };
         let e = b.enlarged(0.2, 105, 100);
-        assert_eq!(e, PixelBox { u_min: 0, v_min: 0, u_max: 104, v_max: 99 });
+        assert_eq!(
+            e,
+            PixelBox {
+                u_min: 0,
+                v_min: 0,
+                u_max: 104,
+                v_max: 99
+            }
+        );
     }
 }

@@ -42,7 +42,10 @@ pub struct StreamStats {
 
 /// Which dataset positions to stream: every `stride`-th, at most `max_frames` of them.
 pub fn stream_positions(len: usize, stride: usize, max_frames: Option<usize>) -> Vec<usize> {
-    (0..len).step_by(stride.max(1)).take(max_frames.unwrap_or(usize::MAX)).collect()
+    (0..len)
+        .step_by(stride.max(1))
+        .take(max_frames.unwrap_or(usize::MAX))
+        .collect()
 }
 
 /// A running reader thread and the receiving end of its channel.
@@ -61,7 +64,10 @@ impl FrameStream {
             .name("catmap-reader".to_owned())
             .spawn(move || read_into(source.as_ref(), &positions, &sender))
             .expect("the OS can start one thread");
-        Self { receiver, handle: Some(handle) }
+        Self {
+            receiver,
+            handle: Some(handle),
+        }
     }
 
     /// Waits for the reader thread to finish (after the receiver has seen `End` or was dropped).
@@ -91,7 +97,10 @@ pub fn read_into(source: &dyn FrameSource, positions: &[usize], sender: &Sender<
             },
             Err(e) => {
                 stats.frames_skipped += 1;
-                StreamMessage::Skipped { position, reason: e.to_string() }
+                StreamMessage::Skipped {
+                    position,
+                    reason: e.to_string(),
+                }
             }
         };
         stats.decode_time += started.elapsed();
@@ -106,7 +115,80 @@ pub fn read_into(source: &dyn FrameSource, positions: &[usize], sender: &Sender<
 
 #[cfg(test)]
 mod tests {
+    use nalgebra::Isometry3;
+
     use super::*;
+    use crate::error::CatmapError;
+    use crate::frame::{CameraIntrinsics, InstanceMask, RgbdFrame};
+    use crate::ids::{ClassId, FrameIndex};
+
+    /// Tiny frames; position 2 fails to decode.
+    struct Fake(usize);
+
+    impl FrameSource for Fake {
+        fn len(&self) -> usize {
+            self.0
+        }
+        fn intrinsics(&self) -> CameraIntrinsics {
+            CameraIntrinsics {
+                width: 2,
+                height: 2,
+                fx: 1.0,
+                fy: 1.0,
+                cx: 0.5,
+                cy: 0.5,
+            }
+        }
+        fn read_frame(&self, position: usize) -> crate::Result<RgbdFrame> {
+            if position == 2 {
+                return Err(CatmapError::layout("depth/depth_2.png", "corrupt"));
+            }
+            Ok(RgbdFrame {
+                index: FrameIndex(position as u64),
+                world_from_camera: Isometry3::identity(),
+                intrinsics: self.intrinsics(),
+                rgb: vec![[0; 3]; 4],
+                depth_m: vec![1.0; 4],
+                instances: InstanceMask::background(4),
+                classes: vec![ClassId(0); 4],
+            })
+        }
+        fn name(&self) -> String {
+            "fake".to_owned()
+        }
+    }
+
+    #[test]
+    fn a_bad_frame_is_skipped_and_the_stream_ends_with_statistics() {
+        let stream = FrameStream::spawn(Arc::new(Fake(4)), vec![0, 1, 2, 3], 1);
+        let messages: Vec<StreamMessage> = stream.receiver.iter().collect();
+        stream.join();
+        assert_eq!(messages.len(), 5, "four frames and the end");
+        assert!(
+            matches!(&messages[2], StreamMessage::Skipped { position: 2, reason } if reason.contains("depth_2.png"))
+        );
+        let StreamMessage::End(stats) = &messages[4] else {
+            panic!("the last message ends the stream")
+        };
+        assert_eq!((stats.frames_sent, stats.frames_skipped), (3, 1));
+    }
+
+    #[test]
+    fn the_reader_never_runs_more_than_the_channel_capacity_ahead() {
+        let stream = FrameStream::spawn(Arc::new(Fake(50)), (0..50).collect(), 3);
+        let waited = Instant::now();
+        while stream.receiver.len() < 3 && waited.elapsed() < Duration::from_secs(5) {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        std::thread::sleep(Duration::from_millis(50));
+        assert_eq!(stream.receiver.len(), 3, "the bounded channel holds the reader back");
+        assert_eq!(
+            stream.receiver.iter().count(),
+            51,
+            "49 frames, one skip and the end: nothing is dropped"
+        );
+        stream.join();
+    }
 
     #[test]
     fn positions_honour_stride_and_limit() {

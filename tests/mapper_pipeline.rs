@@ -7,13 +7,13 @@ use std::sync::Arc;
 use catmap::config::KeyframeConfig;
 use catmap::dataset::FrameSource;
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
+use catmap::nearest::PointIndex;
 use catmap::rng::{RngStream, seeded_rng};
 use catmap::stream::{FrameStream, stream_positions};
 use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
 use catmap::{InstanceLabel, MapperConfig, ObjectId, RgbdFrame};
 use catmap_systems::components::CameraFrame;
 use catmap_systems::{MapSnapshot, Mapper};
-use catmap::nearest::PointIndex;
 
 const SEED: u64 = 11;
 
@@ -27,11 +27,18 @@ struct Pipeline {
 impl Pipeline {
     fn new(config: MapperConfig) -> Self {
         let scene = SyntheticScene::generate(SEED, Preset::Small).expect("the small scene generates");
-        Self { scene, mapper: Mapper::new(config).expect("valid config"), next: 0 }
+        Self {
+            scene,
+            mapper: Mapper::new(config).expect("valid config"),
+            next: 0,
+        }
     }
 
     fn default_config() -> MapperConfig {
-        MapperConfig { seed: SEED, ..MapperConfig::default() }
+        MapperConfig {
+            seed: SEED,
+            ..MapperConfig::default()
+        }
     }
 
     fn frame_count(&self) -> usize {
@@ -69,7 +76,11 @@ fn objects_counted_in(frame: &RgbdFrame) -> BTreeSet<ObjectId> {
             *b = (b.0.min(u), b.1.min(v), b.2.max(u), b.3.max(v));
         }
     }
-    boxes.into_iter().filter(|(_, b)| b.2 - b.0 + 1 > 10 && b.3 - b.1 + 1 > 10).map(|(id, _)| id).collect()
+    boxes
+        .into_iter()
+        .filter(|(_, b)| b.2 - b.0 + 1 > 10 && b.3 - b.1 + 1 > 10)
+        .map(|(id, _)| id)
+        .collect()
 }
 
 #[test]
@@ -82,22 +93,42 @@ fn after_each_pushed_frame_exactly_the_objects_seen_so_far_exist() {
         let map = pipeline.mapper.snapshot();
         let ids: BTreeSet<ObjectId> = map.objects.iter().map(|o| o.id).collect();
         assert_eq!(ids, expected, "objects after frame {}", frame.index);
-        let frames_alive = pipeline.mapper.world_mut().query::<&CameraFrame>().iter(pipeline.mapper.world()).count();
+        let frames_alive = pipeline
+            .mapper
+            .world_mut()
+            .query::<&CameraFrame>()
+            .iter(pipeline.mapper.world())
+            .count();
         assert_eq!(frames_alive, 0, "camera frames are despawned at the end of their tick");
     }
-    assert!(expected.len() >= 4, "the small scene shows several objects, got {}", expected.len());
+    assert!(
+        expected.len() >= 4,
+        "the small scene shows several objects, got {}",
+        expected.len()
+    );
 }
 
 #[test]
 fn object_classes_and_categories_match_the_scene_description() {
     let pipeline = Pipeline::new(Pipeline::default_config());
-    let truth: BTreeMap<ObjectId, catmap::ClassId> = pipeline.scene.objects().iter().map(|o| (o.id, o.class())).collect();
+    let truth: BTreeMap<ObjectId, catmap::ClassId> =
+        pipeline.scene.objects().iter().map(|o| (o.id, o.class())).collect();
     let map = pipeline.run_all();
     for object in &map.objects {
-        assert_eq!(Some(&object.class), truth.get(&object.id), "class of object {}", object.id);
+        assert_eq!(
+            Some(&object.class),
+            truth.get(&object.id),
+            "class of object {}",
+            object.id
+        );
     }
     for category in &map.categories {
-        let expected: Vec<ObjectId> = map.objects.iter().filter(|o| o.class == category.class).map(|o| o.id).collect();
+        let expected: Vec<ObjectId> = map
+            .objects
+            .iter()
+            .filter(|o| o.class == category.class)
+            .map(|o| o.id)
+            .collect();
         assert_eq!(category.members, expected, "members of class {}", category.class);
     }
     let classes: BTreeSet<_> = map.objects.iter().map(|o| o.class).collect();
@@ -112,7 +143,12 @@ fn observed_clouds_only_grow_and_lie_on_the_ground_truth_surface() {
         let frame = pipeline.step();
         for object in pipeline.mapper.snapshot().objects {
             let before = sizes.insert(object.id, object.cloud_points).unwrap_or(0);
-            assert!(object.cloud_points >= before, "cloud of {} shrank at frame {}", object.id, frame.index);
+            assert!(
+                object.cloud_points >= before,
+                "cloud of {} shrank at frame {}",
+                object.id,
+                frame.index
+            );
         }
     }
     let scene = SyntheticScene::generate(SEED, Preset::Small).expect("scene");
@@ -120,20 +156,40 @@ fn observed_clouds_only_grow_and_lie_on_the_ground_truth_surface() {
     for object in &map.objects {
         let truth = scene.object(object.id).expect("mapped objects exist in the scene");
         let mut rng = seeded_rng(1, RngStream::Object(object.id));
-        let samples = truth.mesh_in_world.sample_surface(200_000, &mut rng).expect("mesh has area");
-        let mean = PointIndex::new(&samples).expect("samples").mean_distance(&object.points);
-        assert!(mean < 0.01, "object {}: mean distance to its mesh {mean:.4} m", object.id);
+        let samples = truth
+            .mesh_in_world
+            .sample_surface(200_000, &mut rng)
+            .expect("mesh has area");
+        let mean = PointIndex::new(&samples)
+            .expect("samples")
+            .mean_distance(&object.points);
+        assert!(
+            mean < 0.01,
+            "object {}: mean distance to its mesh {mean:.4} m",
+            object.id
+        );
         assert!(object.bounds.is_some(), "object {} has an oriented box", object.id);
     }
 }
 
 #[test]
 fn keyframe_windows_follow_the_vmap_policy() {
-    let keyframes = KeyframeConfig { capacity: 4, object_stride: 3, background_stride: 5 };
-    let mut pipeline = Pipeline::new(MapperConfig { keyframes: keyframes.clone(), ..Pipeline::default_config() });
+    let keyframes = KeyframeConfig {
+        capacity: 4,
+        object_stride: 3,
+        background_stride: 5,
+    };
+    let mut pipeline = Pipeline::new(MapperConfig {
+        keyframes: keyframes.clone(),
+        ..Pipeline::default_config()
+    });
     let mut first_seen: BTreeMap<ObjectId, catmap::FrameIndex> = BTreeMap::new();
     let expected_len = |visible: u64, stride: u64| {
-        let keyframe_offers = if visible <= 1 { visible } else { 2 + (visible - 1) / stride };
+        let keyframe_offers = if visible <= 1 {
+            visible
+        } else {
+            2 + (visible - 1) / stride
+        };
         (keyframe_offers as usize).min(keyframes.capacity)
     };
     for _ in 0..pipeline.frame_count() {
@@ -142,17 +198,34 @@ fn keyframe_windows_follow_the_vmap_policy() {
         let map = pipeline.mapper.snapshot();
         for object in &map.objects {
             let first = *first_seen.entry(object.id).or_insert(frame.index);
-            assert_eq!(object.keyframes.len(), expected_len(object.visible_frames, 3), "window size of {}", object.id);
+            assert_eq!(
+                object.keyframes.len(),
+                expected_len(object.visible_frames, 3),
+                "window size of {}",
+                object.id
+            );
             if visible_now.contains(&object.id) {
                 assert_eq!(object.latest_box.frame, frame.index);
-                assert!(object.keyframes.contains(&frame.index), "the live frame of {} is in its window", object.id);
+                assert!(
+                    object.keyframes.contains(&frame.index),
+                    "the live frame of {} is in its window",
+                    object.id
+                );
             }
             if object.keyframes.len() < keyframes.capacity {
-                assert_eq!(object.keyframes[0], first, "the first view of {} stays until the window fills", object.id);
+                assert_eq!(
+                    object.keyframes[0], first,
+                    "the first view of {} stays until the window fills",
+                    object.id
+                );
             }
         }
         let background = map.background.expect("the background entity exists");
-        assert_eq!(background.visible_frames, frame.index.0 + 1, "the background is seen in every frame");
+        assert_eq!(
+            background.visible_frames,
+            frame.index.0 + 1,
+            "the background is seen in every frame"
+        );
         assert_eq!(background.keyframes.len(), expected_len(background.visible_frames, 5));
     }
 }
@@ -171,7 +244,14 @@ fn a_scene_on_disk_streams_through_the_reader_thread_like_pushed_frames() {
     write_replica_layout(&scene, dir.path(), |_, _| {}).expect("write the scene");
     let source: Arc<dyn FrameSource> =
         Arc::new(ReplicaSequence::open(dir.path(), &ReplicaOptions::default()).expect("open what was written"));
-    let config = MapperConfig { stream: catmap::config::StreamConfig { channel_capacity: 2, frames_per_tick: 3, ..Default::default() }, ..Pipeline::default_config() };
+    let config = MapperConfig {
+        stream: catmap::config::StreamConfig {
+            channel_capacity: 2,
+            frames_per_tick: 3,
+            ..Default::default()
+        },
+        ..Pipeline::default_config()
+    };
     let stream = FrameStream::spawn(Arc::clone(&source), stream_positions(source.len(), 1, None), 2);
     let mut mapper = Mapper::with_inbox(config, stream.receiver.clone()).expect("valid config");
     mapper.run_to_end(|_| {});
@@ -179,6 +259,15 @@ fn a_scene_on_disk_streams_through_the_reader_thread_like_pushed_frames() {
     let streamed = mapper.finish();
     let pushed = Pipeline::new(Pipeline::default_config()).run_all();
     assert_eq!(streamed.frames_ingested, scene.len() as u64, "no frame is dropped");
-    let summary = |m: &MapSnapshot| m.objects.iter().map(|o| (o.id, o.class, o.visible_frames)).collect::<Vec<_>>();
-    assert_eq!(summary(&streamed), summary(&pushed), "disk and memory give the same objects");
+    let summary = |m: &MapSnapshot| {
+        m.objects
+            .iter()
+            .map(|o| (o.id, o.class, o.visible_frames))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        summary(&streamed),
+        summary(&pushed),
+        "disk and memory give the same objects"
+    );
 }

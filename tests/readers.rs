@@ -19,17 +19,23 @@ const FLOOR: u32 = 40;
 
 fn write_grey16(path: &Path, (w, h): (u32, u32), f: impl Fn(u32, u32) -> u16) {
     std::fs::create_dir_all(path.parent().expect("file in a folder")).expect("mkdir");
-    ImageBuffer::<Luma<u16>, Vec<u16>>::from_fn(w, h, |u, v| Luma([f(u, v)])).save(path).expect("write png");
+    ImageBuffer::<Luma<u16>, Vec<u16>>::from_fn(w, h, |u, v| Luma([f(u, v)]))
+        .save(path)
+        .expect("write png");
 }
 
 fn write_grey8(path: &Path, (w, h): (u32, u32), f: impl Fn(u32, u32) -> u8) {
     std::fs::create_dir_all(path.parent().expect("file in a folder")).expect("mkdir");
-    ImageBuffer::<Luma<u8>, Vec<u8>>::from_fn(w, h, |u, v| Luma([f(u, v)])).save(path).expect("write png");
+    ImageBuffer::<Luma<u8>, Vec<u8>>::from_fn(w, h, |u, v| Luma([f(u, v)]))
+        .save(path)
+        .expect("write png");
 }
 
 fn write_rgb(path: &Path, (w, h): (u32, u32), f: impl Fn(u32, u32) -> [u8; 3]) {
     std::fs::create_dir_all(path.parent().expect("file in a folder")).expect("mkdir");
-    ImageBuffer::<Rgb<u8>, Vec<u8>>::from_fn(w, h, |u, v| Rgb(f(u, v))).save(path).expect("write image");
+    ImageBuffer::<Rgb<u8>, Vec<u8>>::from_fn(w, h, |u, v| Rgb(f(u, v)))
+        .save(path)
+        .expect("write image");
 }
 
 fn pixel(frame: &RgbdFrame, u: u32, v: u32) -> usize {
@@ -59,18 +65,26 @@ fn replica_fixture(frames: usize) -> TempDir {
     let dir = tempfile::tempdir().expect("tempdir");
     let root = dir.path();
     for i in 0..frames {
-        write_rgb(&root.join(format!("rgb/rgb_{i}.png")), (W, H), |u, v| [u as u8 * 8, v as u8 * 10, i as u8]);
-        write_grey16(&root.join(format!("depth/depth_{i}.png")), (W, H), |u, v| match (u, v) {
-            (0, 0) => 0,
-            (31, 0) => 9000,
-            _ => 1000 + 10 * u as u16,
+        write_rgb(&root.join(format!("rgb/rgb_{i}.png")), (W, H), |u, v| {
+            [u as u8 * 8, v as u8 * 10, i as u8]
         });
-        write_grey8(&root.join(format!("semantic_class/semantic_class_{i}.png")), (W, H), |u, v| {
-            replica_class(u, v).0 as u8
+        write_grey16(&root.join(format!("depth/depth_{i}.png")), (W, H), |u, v| {
+            match (u, v) {
+                (0, 0) => 0,
+                (31, 0) => 9000,
+                _ => 1000 + 10 * u as u16,
+            }
         });
-        write_grey16(&root.join(format!("semantic_instance/semantic_instance_{i}.png")), (W, H), |u, v| {
-            replica_class(u, v).1 as u16
-        });
+        write_grey8(
+            &root.join(format!("semantic_class/semantic_class_{i}.png")),
+            (W, H),
+            |u, v| replica_class(u, v).0 as u8,
+        );
+        write_grey16(
+            &root.join(format!("semantic_instance/semantic_instance_{i}.png")),
+            (W, H),
+            |u, v| replica_class(u, v).1 as u16,
+        );
     }
     let traj: Vec<String> = (0..frames).map(replica_pose_line).collect();
     std::fs::write(root.join("traj_w_c.txt"), traj.join("\n") + "\n").expect("write traj");
@@ -101,36 +115,79 @@ fn a_replica_frame_decodes_metric_depth_merged_background_objects_and_pose() {
     assert_eq!(frame.index, FrameIndex(2));
     assert_eq!(frame.depth_m[pixel(&frame, 5, 3)], 1.05, "1050 mm is 1.05 m");
     assert_eq!(frame.depth_m[pixel(&frame, 0, 0)], 0.0, "0 stays invalid");
-    assert_eq!(frame.depth_m[pixel(&frame, 31, 0)], 0.0, "9 m is beyond max_depth_m = 8 m");
+    assert_eq!(
+        frame.depth_m[pixel(&frame, 31, 0)],
+        0.0,
+        "9 m is beyond max_depth_m = 8 m"
+    );
     assert_eq!(frame.rgb[pixel(&frame, 3, 2)], [24, 20, 2]);
-    assert_eq!(frame.instances.label(pixel(&frame, 4, 4)), InstanceLabel::Object(ObjectId(3)), "chair");
-    assert_eq!(frame.instances.label(pixel(&frame, 20, 6)), InstanceLabel::Object(ObjectId(9)), "table");
+    assert_eq!(
+        frame.instances.label(pixel(&frame, 4, 4)),
+        InstanceLabel::Object(ObjectId(3)),
+        "chair"
+    );
+    assert_eq!(
+        frame.instances.label(pixel(&frame, 20, 6)),
+        InstanceLabel::Object(ObjectId(9)),
+        "table"
+    );
     let floor = pixel(&frame, 5, 20);
-    assert_eq!(frame.instances.label(floor), InstanceLabel::Background, "floor instance 5 is background");
+    assert_eq!(
+        frame.instances.label(floor),
+        InstanceLabel::Background,
+        "floor instance 5 is background"
+    );
     assert_eq!(frame.classes[floor], ClassId(FLOOR), "the class survives the merge");
-    assert_eq!(frame.instances.label(pixel(&frame, 12, 15)), InstanceLabel::Background, "instance 0");
+    assert_eq!(
+        frame.instances.label(pixel(&frame, 12, 15)),
+        InstanceLabel::Background,
+        "instance 0"
+    );
 
     let pose = frame.world_from_camera;
     assert!((pose.translation.vector - nalgebra::Vector3::new(2.0, 4.0, 0.5)).norm() < 1e-6);
     let (axis, angle) = pose.rotation.axis_angle().expect("frame 2 is rotated");
-    assert!((angle - 0.2).abs() < 1e-5 && (axis.z - 1.0).abs() < 1e-5, "0.2 rad about z");
+    assert!(
+        (angle - 0.2).abs() < 1e-5 && (axis.z - 1.0).abs() < 1e-5,
+        "0.2 rad about z"
+    );
 }
 
 #[test]
 fn replica_intrinsics_come_from_the_camera_spec_then_the_json_then_the_default() {
     let dir = replica_fixture(1);
     let spec = parse_camera_spec("32,24,30,31,16,12").expect("valid spec");
-    let options = ReplicaOptions { camera: Some(spec), ..ReplicaOptions::default() };
+    let options = ReplicaOptions {
+        camera: Some(spec),
+        ..ReplicaOptions::default()
+    };
     let with_spec = ReplicaSequence::open(dir.path(), &options).expect("opens");
-    assert_eq!(with_spec.intrinsics(), spec, "the camera spec wins over intrinsics.json");
+    assert_eq!(
+        with_spec.intrinsics(),
+        spec,
+        "the camera spec wins over intrinsics.json"
+    );
 
-    let json = CameraIntrinsics { width: 32, height: 24, fx: 20.0, fy: 21.0, cx: 15.5, cy: 11.5 };
-    assert_eq!(open_replica(dir.path()).expect("opens").intrinsics(), json, "then intrinsics.json");
+    let json = CameraIntrinsics {
+        width: 32,
+        height: 24,
+        fx: 20.0,
+        fy: 21.0,
+        cx: 15.5,
+        cy: 11.5,
+    };
+    assert_eq!(
+        open_replica(dir.path()).expect("opens").intrinsics(),
+        json,
+        "then intrinsics.json"
+    );
 
     std::fs::remove_file(dir.path().join("intrinsics.json")).expect("remove json");
     let default = open_replica(dir.path()).expect("opens");
     assert_eq!(default.intrinsics(), CameraIntrinsics::REPLICA, "then Replica's camera");
-    let err = default.read_frame(0).expect_err("32×24 images do not match the 1200×680 camera");
+    let err = default
+        .read_frame(0)
+        .expect_err("32×24 images do not match the 1200×680 camera");
     assert_mentions(&err, &["depth_0.png", "32×24", "1200×680", "intrinsics"]);
 }
 
@@ -149,9 +206,16 @@ fn empty_masks_give_a_frame_without_objects() {
     let dir = replica_fixture(1);
     let root = dir.path();
     write_grey8(&root.join("semantic_class/semantic_class_0.png"), (W, H), |_, _| 0);
-    write_grey16(&root.join("semantic_instance/semantic_instance_0.png"), (W, H), |_, _| 0);
+    write_grey16(
+        &root.join("semantic_instance/semantic_instance_0.png"),
+        (W, H),
+        |_, _| 0,
+    );
     let frame = open_replica(root).expect("opens").read_frame(0).expect("decodes");
-    assert!((0..frame.instances.len()).all(|i| frame.instances.object_at(i).is_none()), "no objects");
+    assert!(
+        (0..frame.instances.len()).all(|i| frame.instances.object_at(i).is_none()),
+        "no objects"
+    );
 }
 
 #[test]
@@ -203,7 +267,10 @@ fn a_corrupt_png_is_an_image_error_naming_the_file() {
 fn an_rgb_image_of_another_size_than_depth_is_rejected() {
     let dir = replica_fixture(1);
     write_rgb(&dir.path().join("rgb/rgb_0.png"), (16, 12), |_, _| [1, 2, 3]);
-    let err = open_replica(dir.path()).expect("opens").read_frame(0).expect_err("16×12 rgb");
+    let err = open_replica(dir.path())
+        .expect("opens")
+        .read_frame(0)
+        .expect_err("16×12 rgb");
     assert_mentions(&err, &["rgb_0.png", "16×12", "32×24", "depth"]);
 }
 
@@ -272,14 +339,19 @@ fn scannet_fixture() -> TempDir {
             (35, 20) => 7000,
             _ => (500 + 10 * u + 100 * v + n) as u16,
         });
-        write_grey8(&root.join(format!("instance-filt/{n}.png")), (2 * SW, 2 * SH), |u, v| {
-            scannet_labels(u / 2, v / 2).0
-        });
+        write_grey8(
+            &root.join(format!("instance-filt/{n}.png")),
+            (2 * SW, 2 * SH),
+            |u, v| scannet_labels(u / 2, v / 2).0,
+        );
         write_grey16(&root.join(format!("label-filt/{n}.png")), (2 * SW, 2 * SH), |u, v| {
             scannet_labels(u / 2, v / 2).1
         });
-        let pose =
-            if n == 5 { "-inf -inf -inf -inf\n".repeat(4) } else { format!("1 0 0 {n}\n0 1 0 0\n0 0 1 0\n0 0 0 1\n") };
+        let pose = if n == 5 {
+            "-inf -inf -inf -inf\n".repeat(4)
+        } else {
+            format!("1 0 0 {n}\n0 1 0 0\n0 0 1 0\n0 0 0 1\n")
+        };
         std::fs::create_dir_all(root.join("pose")).expect("mkdir");
         std::fs::write(root.join(format!("pose/{n}.txt")), pose).expect("write pose");
     }
@@ -296,25 +368,53 @@ fn scannet_frames_are_sorted_by_number_cropped_and_lost_poses_skipped() {
     assert_eq!(sequence.len(), 3, "frame 5 has an -inf pose and is skipped");
     let numbers: Vec<_> = (0..3).filter_map(|p| sequence.file_number(p)).collect();
     assert_eq!(numbers, [1, 2, 10], "integer order, not lexicographic");
-    let cropped = CameraIntrinsics { width: 28, height: 16, fx: 40.0, fy: 41.0, cx: 13.5, cy: 7.5 };
-    assert_eq!(sequence.intrinsics(), cropped, "a 10-px border is cropped and the centre shifts");
+    let cropped = CameraIntrinsics {
+        width: 28,
+        height: 16,
+        fx: 40.0,
+        fy: 41.0,
+        cx: 13.5,
+        cy: 7.5,
+    };
+    assert_eq!(
+        sequence.intrinsics(),
+        cropped,
+        "a 10-px border is cropped and the centre shifts"
+    );
 
     let frame = sequence.read_frame(2).expect("frame 10 decodes");
     frame.validate().expect("all images have the cropped size");
     assert_eq!(frame.index, FrameIndex(10));
-    assert!((frame.world_from_camera.translation.x - 10.0).abs() < 1e-6, "pose of file 10");
-    assert!((frame.depth_m[0] - 1.610).abs() < 1e-6, "cropped (0, 0) is depth pixel (10, 10)");
+    assert!(
+        (frame.world_from_camera.translation.x - 10.0).abs() < 1e-6,
+        "pose of file 10"
+    );
+    assert!(
+        (frame.depth_m[0] - 1.610).abs() < 1e-6,
+        "cropped (0, 0) is depth pixel (10, 10)"
+    );
     assert_eq!(frame.depth_m[pixel(&frame, 25, 10)], 0.0, "7 m is beyond ScanNet's 6 m");
     let red = frame.rgb[pixel(&frame, 3, 5)];
     let blue = frame.rgb[pixel(&frame, 20, 5)];
     let close = |a: [u8; 3], b: [u8; 3]| a.iter().zip(b).all(|(&x, y)| x.abs_diff(y) <= 12);
-    assert!(close(red, [200, 30, 30]) && close(blue, [30, 30, 200]), "colour resized: {red:?} {blue:?}");
+    assert!(
+        close(red, [200, 30, 30]) && close(blue, [30, 30, 200]),
+        "colour resized: {red:?} {blue:?}"
+    );
 
     let label = |u, v| frame.instances.label(pixel(&frame, u, v));
-    assert_eq!(label(8, 5), InstanceLabel::Object(ObjectId(3)), "instance 2 becomes object 3 (+1)");
+    assert_eq!(
+        label(8, 5),
+        InstanceLabel::Object(ObjectId(3)),
+        "instance 2 becomes object 3 (+1)"
+    );
     assert_eq!(label(24, 5), InstanceLabel::Background, "wall label");
     assert_eq!(label(0, 0), InstanceLabel::Background, "unlabelled instance 0");
-    assert_eq!(label(1, 14), InstanceLabel::Unknown, "a labelled pixel without an instance");
+    assert_eq!(
+        label(1, 14),
+        InstanceLabel::Unknown,
+        "a labelled pixel without an instance"
+    );
     assert_eq!(frame.classes[pixel(&frame, 8, 5)], ClassId(5));
 }
 
@@ -332,55 +432,4 @@ fn a_missing_scannet_label_folder_is_named() {
     std::fs::remove_dir_all(dir.path().join("label-filt")).expect("remove labels");
     let err = ScanNetSequence::open(dir.path(), &ScanNetOptions::default()).expect_err("no labels");
     assert_mentions(&err, &["label-filt", "does not exist"]);
-}
-
-#[test]
-#[ignore = "scratch timing"]
-fn zz_scratch_timing() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let root = dir.path();
-    let (w, h) = (1200u32, 680u32);
-    write_rgb(&root.join("rgb/rgb_0.png"), (w, h), |u, v| [(u * 7 % 251) as u8, (v * 3 % 241) as u8, ((u ^ v) % 255) as u8]);
-    write_grey16(&root.join("depth/depth_0.png"), (w, h), |u, v| (500 + (u * 3 + v * 5) % 4000) as u16);
-    write_grey8(&root.join("semantic_class/semantic_class_0.png"), (w, h), |u, v| ((u / 100 + v / 100) * 7 % 100) as u8);
-    write_grey16(&root.join("semantic_instance/semantic_instance_0.png"), (w, h), |u, v| ((u / 50 + v / 60) % 40) as u16);
-    std::fs::write(root.join("traj_w_c.txt"), replica_pose_line(0)).expect("traj");
-    let seq = open_replica(root).expect("open");
-    for (name, f) in [("rgb", 0), ("depth", 1), ("class", 2), ("inst", 3)] {
-        let t = std::time::Instant::now();
-        for _ in 0..10 {
-            match f {
-                0 => { catmap::dataset::images::read_rgb(&root.join("rgb/rgb_0.png")).expect("x"); }
-                1 => { catmap::dataset::images::read_grey16(&root.join("depth/depth_0.png")).expect("x"); }
-                2 => { catmap::dataset::images::read_grey(&root.join("semantic_class/semantic_class_0.png")).expect("x"); }
-                _ => { catmap::dataset::images::read_grey(&root.join("semantic_instance/semantic_instance_0.png")).expect("x"); }
-            }
-        }
-        eprintln!("{name}: {:.2} ms", t.elapsed().as_secs_f64() * 100.0);
-    }
-    let t = std::time::Instant::now();
-    for _ in 0..20 { seq.read_frame(0).expect("read"); }
-    eprintln!("replica 1200x680: {:.2} ms/frame", t.elapsed().as_secs_f64() * 1000.0 / 20.0);
-
-    let sdir = tempfile::tempdir().expect("tempdir");
-    let r = sdir.path();
-    write_rgb(&r.join("color/0.jpg"), (1296, 968), |u, v| [(u * 7 % 251) as u8, (v * 3 % 241) as u8, ((u ^ v) % 255) as u8]);
-    write_grey16(&r.join("depth/0.png"), (640, 480), |u, v| (500 + (u * 3 + v * 5) % 4000) as u16);
-    write_grey8(&r.join("instance-filt/0.png"), (1296, 968), |u, v| ((u / 50 + v / 60) % 40) as u8);
-    write_grey16(&r.join("label-filt/0.png"), (1296, 968), |u, v| ((u / 100 + v / 100) * 7 % 100) as u16);
-    std::fs::create_dir_all(r.join("pose")).expect("mkdir");
-    std::fs::write(r.join("pose/0.txt"), "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n").expect("pose");
-    std::fs::create_dir_all(r.join("intrinsic")).expect("mkdir");
-    std::fs::write(r.join("intrinsic/intrinsic_depth.txt"), "577 0 319.5 0\n0 577 239.5 0\n0 0 1 0\n0 0 0 1\n").expect("k");
-    let seq = ScanNetSequence::open(r, &ScanNetOptions::default()).expect("open");
-    let t = std::time::Instant::now();
-    for _ in 0..10 { catmap::dataset::images::read_rgb(&r.join("color/0.jpg")).expect("x"); }
-    eprintln!("jpg: {:.2} ms", t.elapsed().as_secs_f64() * 100.0);
-    let img = catmap::dataset::images::read_rgb(&r.join("color/0.jpg")).expect("x");
-    let t = std::time::Instant::now();
-    for _ in 0..10 { catmap::dataset::images::resize_bilinear_rgb(img.clone(), 640, 480); }
-    eprintln!("resize: {:.2} ms", t.elapsed().as_secs_f64() * 100.0);
-    let t = std::time::Instant::now();
-    for _ in 0..20 { seq.read_frame(0).expect("read"); }
-    eprintln!("scannet 640x480 (+1296x968 jpg/labels): {:.2} ms/frame", t.elapsed().as_secs_f64() * 1000.0 / 20.0);
 }

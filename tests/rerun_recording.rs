@@ -3,9 +3,9 @@
 
 use std::collections::BTreeSet;
 
+use catmap::MapperConfig;
 use catmap::dataset::FrameSource;
 use catmap::synth::{Preset, SyntheticScene};
-use catmap::MapperConfig;
 use catmap_systems::Mapper;
 use re_log_encoding::DecoderApp;
 use re_log_types::LogMsg;
@@ -29,8 +29,14 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
     let rrd = dir.path().join("recording.rrd");
     let scene = SyntheticScene::generate(5, Preset::Small).expect("scene");
     {
-        let rec = rerun::RecordingStreamBuilder::new("catmap_test").save(&rrd).expect("open the recording file");
-        let mut mapper = Mapper::new(MapperConfig { seed: 5, ..MapperConfig::default() }).expect("config");
+        let rec = rerun::RecordingStreamBuilder::new("catmap_test")
+            .save(&rrd)
+            .expect("open the recording file");
+        let mut mapper = Mapper::new(MapperConfig {
+            seed: 5,
+            ..MapperConfig::default()
+        })
+        .expect("config");
         mapper.set_recording(rec);
         for position in 0..scene.len() {
             mapper.push(scene.read_frame(position).expect("frame")).expect("push");
@@ -42,11 +48,24 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         assert!(map.objects.len() >= 3, "the small scene maps several objects");
     }
     let paths = entity_paths(&rrd);
-    for expected in ["world", "world/camera", "world/camera/image", "world/camera/image/rgb", "world/camera/image/depth", "world/camera/image/instances"] {
+    for expected in [
+        "world",
+        "world/camera",
+        "world/camera/image",
+        "world/camera/image/rgb",
+        "world/camera/image/depth",
+        "world/camera/image/instances",
+    ] {
         assert!(paths.contains(expected), "{expected} missing from {paths:?}");
     }
-    let objects_with_points = paths.iter().filter(|p| p.starts_with("world/objects/") && p.ends_with("/points")).count();
-    let objects_with_boxes = paths.iter().filter(|p| p.starts_with("world/objects/") && p.ends_with("/box")).count();
+    let objects_with_points = paths
+        .iter()
+        .filter(|p| p.starts_with("world/objects/") && p.ends_with("/points"))
+        .count();
+    let objects_with_boxes = paths
+        .iter()
+        .filter(|p| p.starts_with("world/objects/") && p.ends_with("/box"))
+        .count();
     assert!(objects_with_points >= 3, "object clouds are logged: {paths:?}");
     assert!(objects_with_boxes >= 3, "object boxes are logged: {paths:?}");
 }

@@ -4,7 +4,6 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::Instant;
 
 use catmap::dataset::FrameSource;
 use catmap::mesh::TriangleMesh;
@@ -21,9 +20,17 @@ fn small_scene(seed: u64) -> SyntheticScene {
 #[test]
 fn the_same_seed_gives_identical_frames_and_descriptions() {
     let (a, b) = (small_scene(7), small_scene(7));
-    assert_eq!(SceneDescription::of(&a), SceneDescription::of(&b), "same seed, same scene.json");
+    assert_eq!(
+        SceneDescription::of(&a),
+        SceneDescription::of(&b),
+        "same seed, same scene.json"
+    );
     for i in 0..a.len() {
-        assert_eq!(a.render(i).expect("frame"), b.render(i).expect("frame"), "frame {i} renders identically");
+        assert_eq!(
+            a.render(i).expect("frame"),
+            b.render(i).expect("frame"),
+            "frame {i} renders identically"
+        );
     }
 }
 
@@ -37,16 +44,40 @@ fn different_seeds_give_different_layouts() {
 #[test]
 fn the_small_preset_has_three_identical_chairs_at_different_poses() {
     let scene = small_scene(3);
-    let chairs: Vec<_> = scene.objects().iter().filter(|o| o.design == Design::LadderBackChair).collect();
-    assert!(chairs.len() >= 3, "at least three chairs of one design, got {}", chairs.len());
+    let chairs: Vec<_> = scene
+        .objects()
+        .iter()
+        .filter(|o| o.design == Design::LadderBackChair)
+        .collect();
+    assert!(
+        chairs.len() >= 3,
+        "at least three chairs of one design, got {}",
+        chairs.len()
+    );
     let reference = Design::LadderBackChair.mesh();
     for chair in &chairs {
         let in_object = chair.mesh_in_world.transformed(&chair.world_from_object.inverse());
-        assert_eq!(in_object.triangles, reference.triangles, "chair {} has the design's topology", chair.id);
-        let max_error = in_object.vertices.iter().zip(&reference.vertices).map(|(a, b)| (a - b).norm()).fold(0.0, f32::max);
-        assert!(max_error < 1e-5, "chair {} is the design moved rigidly (error {max_error} m)", chair.id);
+        assert_eq!(
+            in_object.triangles, reference.triangles,
+            "chair {} has the design's topology",
+            chair.id
+        );
+        let max_error = in_object
+            .vertices
+            .iter()
+            .zip(&reference.vertices)
+            .map(|(a, b)| (a - b).norm())
+            .fold(0.0, f32::max);
+        assert!(
+            max_error < 1e-5,
+            "chair {} is the design moved rigidly (error {max_error} m)",
+            chair.id
+        );
     }
-    let distinct: BTreeSet<_> = chairs.iter().map(|c| c.world_from_object.translation.vector.map(|x| x.to_bits()).data.0).collect();
+    let distinct: BTreeSet<_> = chairs
+        .iter()
+        .map(|c| c.world_from_object.translation.vector.map(|x| x.to_bits()).data.0)
+        .collect();
     assert_eq!(distinct.len(), chairs.len(), "chairs stand in different places");
 }
 
@@ -58,21 +89,35 @@ fn object_depth_back_projects_onto_its_ground_truth_mesh() {
         .objects()
         .iter()
         .map(|o| {
-            let samples = o.mesh_in_world.sample_surface(200_000, &mut rng).expect("objects have area");
+            let samples = o
+                .mesh_in_world
+                .sample_surface(200_000, &mut rng)
+                .expect("objects have area");
             let points: Vec<[f32; 3]> = samples.iter().map(|p| [p.x, p.y, p.z]).collect();
-            (o.id, ImmutableKdTree::new_from_slice(&points).expect("kd-tree over surface samples"))
+            (
+                o.id,
+                ImmutableKdTree::new_from_slice(&points).expect("kd-tree over surface samples"),
+            )
         })
         .collect();
     let mut checked = 0;
     for position in [0, 10, 20, 29] {
         let frame = scene.read_frame(position).expect("frame");
         for i in 0..frame.instances.len() {
-            let InstanceLabel::Object(id) = frame.instances.label(i) else { continue };
+            let InstanceLabel::Object(id) = frame.instances.label(i) else {
+                continue;
+            };
             let (_, tree) = trees.iter().find(|(o, _)| *o == id).expect("labels name scene objects");
             let p = frame.point_in_world(i).expect("object pixels have depth");
-            let nearest = tree.query(&[p.x, p.y, p.z]).nearest_one::<SquaredEuclidean<f32>>().execute();
+            let nearest = tree
+                .query(&[p.x, p.y, p.z])
+                .nearest_one::<SquaredEuclidean<f32>>()
+                .execute();
             let distance = nearest.distance.sqrt();
-            assert!(distance < 0.01, "frame {position} pixel {i} of object {id} lies {distance} m off its mesh");
+            assert!(
+                distance < 0.01,
+                "frame {position} pixel {i} of object {id} lies {distance} m off its mesh"
+            );
             checked += 1;
         }
     }
@@ -98,10 +143,16 @@ fn objects_are_only_partly_observed() {
         let fractions = scene.observed_surface_fraction();
         assert_eq!(fractions.len(), scene.objects().len());
         for (id, &f) in fractions {
-            assert!(f > 0.0 && f < 1.0, "{preset}: object {id} observed fraction {f} lies in (0, 1)");
+            assert!(
+                f > 0.0 && f < 1.0,
+                "{preset}: object {id} observed fraction {f} lies in (0, 1)"
+            );
         }
         let mostly_hidden = fractions.values().filter(|&&f| f < 0.9).count();
-        assert!(2 * mostly_hidden > fractions.len(), "{preset}: most objects keep unseen surface: {fractions:?}");
+        assert!(
+            2 * mostly_hidden > fractions.len(),
+            "{preset}: most objects keep unseen surface: {fractions:?}"
+        );
     }
 }
 
@@ -125,16 +176,29 @@ fn the_written_layout_matches_the_replica_vmap_format() {
         ("semantic_instance", "semantic_instance", image::ColorType::L16),
     ];
     for (folder, stem, color) in expected {
-        assert_eq!(std::fs::read_dir(dir.path().join(folder)).expect("folder").count(), scene.len(), "{folder}");
+        assert_eq!(
+            std::fs::read_dir(dir.path().join(folder)).expect("folder").count(),
+            scene.len(),
+            "{folder}"
+        );
         for i in 0..scene.len() {
             let img = image::open(dir.path().join(format!("{folder}/{stem}_{i}.png"))).expect("readable PNG");
-            assert_eq!((img.width(), img.height(), img.color()), (k.width, k.height, color), "{folder} frame {i}");
+            assert_eq!(
+                (img.width(), img.height(), img.color()),
+                (k.width, k.height, color),
+                "{folder} frame {i}"
+            );
         }
     }
-    let depth = image::open(dir.path().join("depth/depth_12.png")).expect("depth").into_luma16();
+    let depth = image::open(dir.path().join("depth/depth_12.png"))
+        .expect("depth")
+        .into_luma16();
     let frame = scene.read_frame(12).expect("frame");
     for (mm, &m) in depth.as_raw().iter().zip(&frame.depth_m) {
-        assert!((f32::from(*mm) / 1000.0 - m).abs() <= 0.0006, "depth PNG holds millimetres");
+        assert!(
+            (f32::from(*mm) / 1000.0 - m).abs() <= 0.0006,
+            "depth PNG holds millimetres"
+        );
     }
 
     let traj = std::fs::read_to_string(dir.path().join("traj_w_c.txt")).expect("trajectory");
@@ -143,19 +207,31 @@ fn the_written_layout_matches_the_replica_vmap_format() {
         let values: Vec<f32> = line.split_whitespace().map(|v| v.parse().expect("float")).collect();
         let m = pose.to_homogeneous();
         assert_eq!(values.len(), 16);
-        assert!((0..16).all(|k| (values[k] - m[(k / 4, k % 4)]).abs() < 1e-6), "row-major camera-to-world");
+        assert!(
+            (0..16).all(|k| (values[k] - m[(k / 4, k % 4)]).abs() < 1e-6),
+            "row-major camera-to-world"
+        );
     }
 
     let intrinsics: serde_json::Value = read_json(&dir.path().join("intrinsics.json"));
     assert_eq!(intrinsics["width"], k.width);
     assert_eq!(intrinsics["depth_scale"], 1000.0);
-    let description: SceneDescription = serde_json::from_value(read_json(&dir.path().join("scene.json"))).expect("scene.json");
+    let description: SceneDescription =
+        serde_json::from_value(read_json(&dir.path().join("scene.json"))).expect("scene.json");
     assert_eq!(description, SceneDescription::of(&scene));
     for object in scene.objects() {
-        let mesh = TriangleMesh::read_ply(&dir.path().join(format!("gt_meshes/obj_{}.ply", object.id))).expect("GT mesh");
-        assert_eq!(mesh, object.mesh_in_world, "GT mesh of object {} round-trips", object.id);
+        let mesh =
+            TriangleMesh::read_ply(&dir.path().join(format!("gt_meshes/obj_{}.ply", object.id))).expect("GT mesh");
+        assert_eq!(
+            mesh, object.mesh_in_world,
+            "GT mesh of object {} round-trips",
+            object.id
+        );
     }
-    let leftovers = walk(dir.path()).into_iter().filter(|p| p.extension().is_some_and(|e| e == "tmp")).count();
+    let leftovers = walk(dir.path())
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "tmp"))
+        .count();
     assert_eq!(leftovers, 0, "no temporary files remain");
 }
 
@@ -164,53 +240,10 @@ fn read_json(path: &Path) -> serde_json::Value {
 }
 
 fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
-    let entries = std::fs::read_dir(dir).expect("folder").map(|e| e.expect("entry").path());
-    entries.flat_map(|p| if p.is_dir() { walk(&p) } else { vec![p] }).collect()
-}
-
-/// Reports generation, rendering and writing times (run with `--ignored --nocapture`).
-#[test]
-#[ignore = "timing report, slow in unoptimised builds"]
-fn report_generation_times() {
-    let start = Instant::now();
-    let scene = small_scene(0);
-    let generated = start.elapsed();
-    (0..scene.len()).for_each(|i| drop(scene.render(i).expect("frame")));
-    let observed = scene.observed_surface_fraction().len();
-    eprintln!("small: generate {generated:?}, generate + render all + {observed} fractions {:?}", start.elapsed());
-
-    let start = Instant::now();
-    let scene = SyntheticScene::generate(0, Preset::Default).expect("default scene");
-    let generated = start.elapsed();
-    let tmp = tempfile::tempdir().expect("temp dir");
-    let dir = std::env::var_os("CATMAP_SYNTH_OUT").map_or_else(|| tmp.path().to_owned(), Into::into);
-    write_replica_layout(&scene, &dir, |_, _| {}).expect("write layout");
-    eprintln!("default: generate {generated:?}, generate + render + write {:?} into {}", start.elapsed(), dir.display());
-    eprintln!("default: observed fractions {:?}", scene.observed_surface_fraction());
-}
-
-#[test]
-#[ignore = "scratch breakdown"]
-fn scratch_breakdown() {
-    use rayon::prelude::*;
-    let scene = SyntheticScene::generate(0, Preset::Default).expect("default scene");
-    let start = Instant::now();
-    (0..scene.len()).into_par_iter().for_each(|i| drop(scene.render(i).expect("frame")));
-    eprintln!("render all {:?}", start.elapsed());
-    let start = Instant::now();
-    let n = scene.observed_surface_fraction().len();
-    eprintln!("fractions {n} {:?}", start.elapsed());
-}
-
-#[test]
-#[ignore = "scratch stats"]
-fn scratch_stats() {
-    use std::sync::atomic::Ordering::Relaxed;
-    let scene = SyntheticScene::generate(0, Preset::Default).expect("default scene");
-    let g = scene.geometry();
-    eprintln!("triangles {} nodes {:?}", g.triangle_count(), catmap::synth::bvh::node_count(g.bvh()));
-    let start = Instant::now();
-    for i in [0, 60, 120, 180] { drop(scene.render(i).expect("frame")); }
-    let rays = 4.0 * 640.0 * 480.0;
-    eprintln!("per ray: {:?} nodes {} tris {}", start.elapsed() / (rays as u32), catmap::synth::bvh::NODES.load(Relaxed) as f64 / rays, catmap::synth::bvh::TRIS.load(Relaxed) as f64 / rays);
+    let entries = std::fs::read_dir(dir)
+        .expect("folder")
+        .map(|e| e.expect("entry").path());
+    entries
+        .flat_map(|p| if p.is_dir() { walk(&p) } else { vec![p] })
+        .collect()
 }

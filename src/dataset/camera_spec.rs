@@ -19,12 +19,21 @@ const ORTHONORMAL_TOLERANCE: f64 = 1e-2;
 
 /// Why `intrinsics` cannot describe a pinhole camera, if it cannot.
 pub fn intrinsics_problem(intrinsics: &CameraIntrinsics) -> Option<String> {
-    let CameraIntrinsics { width, height, fx, fy, cx, cy } = *intrinsics;
+    let CameraIntrinsics {
+        width,
+        height,
+        fx,
+        fy,
+        cx,
+        cy,
+    } = *intrinsics;
     if width == 0 || height == 0 {
         return Some(format!("image size {width}×{height} must be positive"));
     }
     if !(fx > 0.0 && fy > 0.0 && fx.is_finite() && fy.is_finite()) {
-        return Some(format!("focal lengths fx = {fx}, fy = {fy} must be positive and finite"));
+        return Some(format!(
+            "focal lengths fx = {fx}, fy = {fy} must be positive and finite"
+        ));
     }
     if !(cx.is_finite() && cy.is_finite()) {
         return Some(format!("principal point ({cx}, {cy}) must be finite"));
@@ -37,10 +46,14 @@ pub fn parse_camera_spec(spec: &str) -> Result<CameraIntrinsics> {
     let bad = |reason: String| CatmapError::Config(format!("--camera {spec:?}: {reason}"));
     let parts: Vec<&str> = spec.split(',').map(str::trim).collect();
     let [w, h, fx, fy, cx, cy] = parts[..] else {
-        return Err(bad(format!("expected 6 comma-separated values W,H,FX,FY,CX,CY, found {}", parts.len())));
+        return Err(bad(format!(
+            "expected 6 comma-separated values W,H,FX,FY,CX,CY, found {}",
+            parts.len()
+        )));
     };
     let size = |name: &str, text: &str| {
-        text.parse::<u32>().map_err(|_| bad(format!("{name} must be a positive integer, found {text:?}")))
+        text.parse::<u32>()
+            .map_err(|_| bad(format!("{name} must be a positive integer, found {text:?}")))
     };
     let number = |name: &str, text: &str| match text.parse::<f32>() {
         Ok(v) if v.is_finite() => Ok(v),
@@ -65,7 +78,11 @@ fn read_text(path: &Path) -> Result<String> {
 }
 
 fn parse_error(path: &Path, line: usize, reason: impl Into<String>) -> CatmapError {
-    CatmapError::Parse { path: path.to_path_buf(), line, reason: reason.into() }
+    CatmapError::Parse {
+        path: path.to_path_buf(),
+        line,
+        reason: reason.into(),
+    }
 }
 
 /// Reads `intrinsics.json`: an object with numeric `width`, `height`, `fx`, `fy`, `cx`, `cy`
@@ -84,7 +101,11 @@ pub fn read_intrinsics_json(path: &Path) -> Result<CameraIntrinsics> {
         if v.fract() == 0.0 && v >= 1.0 && v <= f64::from(u32::MAX) {
             Ok(v as u32)
         } else {
-            Err(parse_error(path, 0, format!("{key:?} must be a positive integer, found {v}")))
+            Err(parse_error(
+                path,
+                0,
+                format!("{key:?} must be a positive integer, found {v}"),
+            ))
         }
     };
     let intrinsics = CameraIntrinsics {
@@ -141,18 +162,27 @@ pub fn world_from_camera_from_rows(m: &[f64; 16]) -> std::result::Result<Isometr
     if m.iter().any(|v| !v.is_finite()) {
         return Err("pose has a NaN or infinite entry".to_owned());
     }
-    let last_row_off = [m[12], m[13], m[14], m[15] - 1.0].iter().any(|v| v.abs() > LAST_ROW_TOLERANCE);
+    let last_row_off = [m[12], m[13], m[14], m[15] - 1.0]
+        .iter()
+        .any(|v| v.abs() > LAST_ROW_TOLERANCE);
     if last_row_off {
-        return Err(format!("last row is [{}, {}, {}, {}], expected [0, 0, 0, 1]", m[12], m[13], m[14], m[15]));
+        return Err(format!(
+            "last row is [{}, {}, {}, {}], expected [0, 0, 0, 1]",
+            m[12], m[13], m[14], m[15]
+        ));
     }
     let rotation = Matrix3::new(m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]);
     let det = rotation.determinant();
     if det <= 0.0 {
-        return Err(format!("rotation part has determinant {det:.4}, expected a rotation (determinant 1)"));
+        return Err(format!(
+            "rotation part has determinant {det:.4}, expected a rotation (determinant 1)"
+        ));
     }
     let deviation = (rotation.transpose() * rotation - Matrix3::identity()).amax();
     if deviation > ORTHONORMAL_TOLERANCE {
-        return Err(format!("rotation part is not orthonormal (RᵀR differs from I by {deviation:.4})"));
+        return Err(format!(
+            "rotation part is not orthonormal (RᵀR differs from I by {deviation:.4})"
+        ));
     }
     let svd = rotation.svd(true, true);
     let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
@@ -160,7 +190,10 @@ pub fn world_from_camera_from_rows(m: &[f64; 16]) -> std::result::Result<Isometr
     };
     let orthonormal = Rotation3::from_matrix_unchecked((u * v_t).cast::<f32>());
     let translation = Translation3::new(m[3] as f32, m[7] as f32, m[11] as f32);
-    Ok(Isometry3::from_parts(translation, UnitQuaternion::from_rotation_matrix(&orthonormal)))
+    Ok(Isometry3::from_parts(
+        translation,
+        UnitQuaternion::from_rotation_matrix(&orthonormal),
+    ))
 }
 
 #[cfg(test)]
@@ -170,15 +203,33 @@ mod tests {
     #[test]
     fn camera_spec_parses_six_values() {
         let k = parse_camera_spec("640, 480,500,510,319.5,239.5").expect("valid spec");
-        assert_eq!(k, CameraIntrinsics { width: 640, height: 480, fx: 500.0, fy: 510.0, cx: 319.5, cy: 239.5 });
+        assert_eq!(
+            k,
+            CameraIntrinsics {
+                width: 640,
+                height: 480,
+                fx: 500.0,
+                fy: 510.0,
+                cx: 319.5,
+                cy: 239.5
+            }
+        );
     }
 
     #[test]
     fn camera_spec_errors_say_what_is_wrong() {
         let count = parse_camera_spec("640,480,500").expect_err("three values");
-        assert!(count.to_string().contains("expected 6 comma-separated values"), "{count}");
+        assert!(
+            count.to_string().contains("expected 6 comma-separated values"),
+            "{count}"
+        );
         let width = parse_camera_spec("6x0,480,500,500,1,1").expect_err("bad width");
-        assert!(width.to_string().contains("W must be a positive integer, found \"6x0\""), "{width}");
+        assert!(
+            width
+                .to_string()
+                .contains("W must be a positive integer, found \"6x0\""),
+            "{width}"
+        );
         let focal = parse_camera_spec("640,480,-5,500,1,1").expect_err("negative focal length");
         assert!(focal.to_string().contains("focal lengths"), "{focal}");
         let nan = parse_camera_spec("640,480,500,500,NaN,1").expect_err("NaN centre");
@@ -196,9 +247,21 @@ mod tests {
 
     #[test]
     fn reflections_and_projective_rows_are_rejected() {
-        let mirror = [-1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0];
-        assert!(world_from_camera_from_rows(&mirror).expect_err("det −1").contains("determinant"));
-        let projective = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.5, 1.0];
-        assert!(world_from_camera_from_rows(&projective).expect_err("last row").contains("last row"));
+        let mirror = [
+            -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ];
+        assert!(
+            world_from_camera_from_rows(&mirror)
+                .expect_err("det −1")
+                .contains("determinant")
+        );
+        let projective = [
+            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.5, 1.0,
+        ];
+        assert!(
+            world_from_camera_from_rows(&projective)
+                .expect_err("last row")
+                .contains("last row")
+        );
     }
 }

@@ -1,9 +1,9 @@
 //! Dataset image files: finding numbered files, decoding PNG/JPEG into flat pixel buffers, and the
 //! resampling the readers need (nearest and bilinear resize, border crop).
 //!
-//! Decoders write straight into the returned buffer (one allocation per image, none per pixel).
-//! The `*_from_bytes` functions are pure; the `read_*` wrappers only add the file read. Every error
-//! names the file and the reason.
+//! Decoders write into flat buffers (at most a raw-sample buffer and the typed result per image,
+//! never an allocation per pixel). The `*_from_bytes` functions are pure; the `read_*` wrappers only
+//! add the file read. Every error names the file and the reason.
 
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
@@ -61,7 +61,10 @@ pub fn numbered_files(dir: &Path, prefix: &str, suffix: &str) -> Result<Vec<(u64
         let entry = entry.map_err(|e| CatmapError::io(dir, e))?;
         let name = entry.file_name().to_string_lossy().into_owned();
         let number = name.strip_prefix(prefix).and_then(|rest| rest.strip_suffix(suffix));
-        match number.filter(|n| n.bytes().all(|b| b.is_ascii_digit())).and_then(|n| n.parse().ok()) {
+        match number
+            .filter(|n| n.bytes().all(|b| b.is_ascii_digit()))
+            .and_then(|n| n.parse().ok())
+        {
             Some(n) => files.push((n, entry.path())),
             None => skipped.push(name),
         }
@@ -80,7 +83,10 @@ pub fn numbered_files(dir: &Path, prefix: &str, suffix: &str) -> Result<Vec<(u64
 }
 
 fn image_error(path: &Path, reason: impl std::fmt::Display) -> CatmapError {
-    CatmapError::Image { path: path.to_path_buf(), reason: reason.to_string() }
+    CatmapError::Image {
+        path: path.to_path_buf(),
+        reason: reason.to_string(),
+    }
 }
 
 fn read_bytes(path: &Path) -> Result<Vec<u8>> {
@@ -89,20 +95,26 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 
 /// Opens a decoder on `bytes` (format guessed from the content) and checks the size is sane.
 fn decoder_of<'a>(bytes: &'a [u8], path: &Path) -> Result<(impl ImageDecoder + 'a, usize)> {
-    let reader = ImageReader::new(Cursor::new(bytes)).with_guessed_format().map_err(|e| image_error(path, e))?;
+    let reader = ImageReader::new(Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| image_error(path, e))?;
     let decoder = reader.into_decoder().map_err(|e| image_error(path, e))?;
     let (width, height) = decoder.dimensions();
     let pixel_count = u64::from(width) * u64::from(height);
     if pixel_count == 0 || pixel_count > MAX_PIXELS {
-        let reason = format!("is {} pixels, expected 1 to {MAX_PIXELS} pixels", size_text((width, height)));
+        let reason = format!(
+            "is {} pixels, expected 1 to {MAX_PIXELS} pixels",
+            size_text((width, height))
+        );
         return Err(image_error(path, reason));
     }
     let pixel_count = usize::try_from(pixel_count).map_err(|e| image_error(path, e))?;
     Ok((decoder, pixel_count))
 }
 
-/// Decodes an 8- or 16-bit single-channel image into values of `T` (any type holding a `u16`).
-fn grey_as<T: From<u16>>(bytes: &[u8], path: &Path) -> Result<Image<T>> {
+/// Decodes an 8- or 16-bit single-channel image into values of `T` (any type holding a `u16`,
+/// e.g. `f32` for depth that is then converted in place).
+pub fn grey_from_bytes_as<T: From<u16>>(bytes: &[u8], path: &Path) -> Result<Image<T>> {
     let (decoder, n) = decoder_of(bytes, path)?;
     let (width, height) = decoder.dimensions();
     let pixels = match decoder.color_type() {
@@ -114,7 +126,9 @@ fn grey_as<T: From<u16>>(bytes: &[u8], path: &Path) -> Result<Image<T>> {
         ColorType::L16 => {
             // The decoder returns 16-bit samples in native byte order.
             let mut raw = vec![[0u8; 2]; n];
-            decoder.read_image(raw.as_flattened_mut()).map_err(|e| image_error(path, e))?;
+            decoder
+                .read_image(raw.as_flattened_mut())
+                .map_err(|e| image_error(path, e))?;
             raw.into_iter().map(|b| T::from(u16::from_ne_bytes(b))).collect()
         }
         other => {
@@ -127,12 +141,12 @@ fn grey_as<T: From<u16>>(bytes: &[u8], path: &Path) -> Result<Image<T>> {
 
 /// Decodes an 8- or 16-bit single-channel image into unsigned values (class or instance ids).
 pub fn grey_from_bytes(bytes: &[u8], path: &Path) -> Result<Image<u32>> {
-    grey_as(bytes, path)
+    grey_from_bytes_as(bytes, path)
 }
 
 /// Decodes an 8- or 16-bit single-channel image into `u16` values (raw depth).
 pub fn grey16_from_bytes(bytes: &[u8], path: &Path) -> Result<Image<u16>> {
-    grey_as(bytes, path)
+    grey_from_bytes_as(bytes, path)
 }
 
 /// Decodes an 8-bit RGB image (PNG or JPEG); RGBA drops alpha, grey is replicated to RGB.
@@ -142,12 +156,16 @@ pub fn rgb_from_bytes(bytes: &[u8], path: &Path) -> Result<Image<[u8; 3]>> {
     let pixels = match decoder.color_type() {
         ColorType::Rgb8 => {
             let mut rgb = vec![[0u8; 3]; n];
-            decoder.read_image(rgb.as_flattened_mut()).map_err(|e| image_error(path, e))?;
+            decoder
+                .read_image(rgb.as_flattened_mut())
+                .map_err(|e| image_error(path, e))?;
             rgb
         }
         ColorType::Rgba8 => {
             let mut rgba = vec![[0u8; 4]; n];
-            decoder.read_image(rgba.as_flattened_mut()).map_err(|e| image_error(path, e))?;
+            decoder
+                .read_image(rgba.as_flattened_mut())
+                .map_err(|e| image_error(path, e))?;
             rgba.into_iter().map(|[r, g, b, _]| [r, g, b]).collect()
         }
         ColorType::L8 => {
@@ -156,7 +174,10 @@ pub fn rgb_from_bytes(bytes: &[u8], path: &Path) -> Result<Image<[u8; 3]>> {
             grey.into_iter().map(|l| [l; 3]).collect()
         }
         other => {
-            return Err(image_error(path, format!("expected an 8-bit RGB or RGBA image, found {other:?}")));
+            return Err(image_error(
+                path,
+                format!("expected an 8-bit RGB or RGBA image, found {other:?}"),
+            ));
         }
     };
     Ok(Image { width, height, pixels })
@@ -170,6 +191,11 @@ pub fn read_grey(path: &Path) -> Result<Image<u32>> {
 /// Reads and decodes a single-channel image file into `u16` values.
 pub fn read_grey16(path: &Path) -> Result<Image<u16>> {
     grey16_from_bytes(&read_bytes(path)?, path)
+}
+
+/// Reads and decodes a single-channel image file into values of `T`.
+pub fn read_grey_as<T: From<u16>>(path: &Path) -> Result<Image<T>> {
+    grey_from_bytes_as(&read_bytes(path)?, path)
 }
 
 /// Reads and decodes an RGB(A) image file.
@@ -189,30 +215,36 @@ pub fn require_size<T: Copy>(image: &Image<T>, expected: (u32, u32), path: &Path
     if image.size() == expected {
         return Ok(());
     }
-    let reason = format!("is {} pixels, but {what} is {}", size_text(image.size()), size_text(expected));
+    let reason = format!(
+        "is {} pixels, but {what} is {}",
+        size_text(image.size()),
+        size_text(expected)
+    );
     Err(image_error(path, reason))
 }
 
 /// Checks depth-conversion options: a positive finite scale and a positive maximum depth.
 pub fn check_depth_options(depth_scale: f32, max_depth_m: f32) -> Result<()> {
     if !depth_scale.is_finite() || depth_scale <= 0.0 {
-        return Err(CatmapError::Config(format!("depth_scale must be positive and finite, got {depth_scale}")));
+        return Err(CatmapError::Config(format!(
+            "depth_scale must be positive and finite, got {depth_scale}"
+        )));
     }
     if max_depth_m.is_nan() || max_depth_m <= 0.0 {
-        return Err(CatmapError::Config(format!("max_depth_m must be positive, got {max_depth_m}")));
+        return Err(CatmapError::Config(format!(
+            "max_depth_m must be positive, got {max_depth_m}"
+        )));
     }
     Ok(())
 }
 
-/// Raw depth to metres: `raw / depth_scale`; 0 stays 0 (invalid) and depth beyond `max_depth_m`
-/// becomes 0 (invalid), as vMAP's `DepthFilter` does.
-pub fn depth_m_from_raw(raw: &[u16], depth_scale: f32, max_depth_m: f32) -> Vec<f32> {
-    raw.iter()
-        .map(|&value| {
-            let depth_m = f32::from(value) / depth_scale;
-            if depth_m > max_depth_m { 0.0 } else { depth_m }
-        })
-        .collect()
+/// Raw depth values to metres, in place: `raw / depth_scale`; 0 stays 0 (invalid) and depth
+/// beyond `max_depth_m` becomes 0 (invalid), as vMAP's `DepthFilter` does.
+pub fn depth_to_metres_in_place(depth: &mut [f32], depth_scale: f32, max_depth_m: f32) {
+    for value in depth {
+        let depth_m = *value / depth_scale;
+        *value = if depth_m > max_depth_m { 0.0 } else { depth_m };
+    }
 }
 
 /// Nearest-neighbour resize (OpenCV `INTER_NEAREST`: source pixel `floor(x · src / dst)`), for labels.
@@ -221,7 +253,9 @@ pub fn resize_nearest<T: Copy + Default>(src: Image<T>, width: u32, height: u32)
         return src;
     }
     let (sw, sh) = (src.width as usize, src.height as usize);
-    let columns: Vec<usize> = (0..width as usize).map(|x| (x * sw / width as usize).min(sw - 1)).collect();
+    let columns: Vec<usize> = (0..width as usize)
+        .map(|x| (x * sw / width as usize).min(sw - 1))
+        .collect();
     let mut pixels = Vec::with_capacity(width as usize * height as usize);
     for y in 0..height as usize {
         let sy = (y * sh / height as usize).min(sh - 1);
@@ -263,21 +297,27 @@ pub fn resize_bilinear_rgb(src: Image<[u8; 3]>, width: u32, height: u32) -> Imag
     let columns = bilinear_taps(sw, width as usize);
     let rows = bilinear_taps(src.height as usize, height as usize);
     let mut pixels = vec![[0u8; 3]; width as usize * height as usize];
-    pixels.par_chunks_mut(width as usize).zip(&rows).for_each(|(out, &(y0, y1, wy))| {
-        let (Some(top), Some(bottom)) = (src.pixels.get(y0 * sw..(y0 + 1) * sw), src.pixels.get(y1 * sw..(y1 + 1) * sw))
-        else {
-            return;
-        };
-        for (o, &(x0, x1, wx)) in out.iter_mut().zip(&columns) {
-            let (a, b, c, d) = (top[x0], top[x1], bottom[x0], bottom[x1]);
-            *o = std::array::from_fn(|k| {
-                let upper = u32::from(a[k]) * (WEIGHT_ONE - wx) + u32::from(b[k]) * wx;
-                let lower = u32::from(c[k]) * (WEIGHT_ONE - wx) + u32::from(d[k]) * wx;
-                let sum = upper * (WEIGHT_ONE - wy) + lower * wy;
-                ((sum + (1 << (2 * WEIGHT_BITS - 1))) >> (2 * WEIGHT_BITS)) as u8
-            });
-        }
-    });
+    pixels
+        .par_chunks_mut(width as usize)
+        .zip(&rows)
+        .for_each(|(out, &(y0, y1, wy))| {
+            let (Some(top), Some(bottom)) = (
+                src.pixels.get(y0 * sw..(y0 + 1) * sw),
+                src.pixels.get(y1 * sw..(y1 + 1) * sw),
+            ) else {
+                return;
+            };
+            for (o, &(x0, x1, wx)) in out.iter_mut().zip(&columns) {
+                // The taps are < `sw` by construction, and `top`/`bottom` hold `sw` pixels.
+                let (a, b, c, d) = (top[x0], top[x1], bottom[x0], bottom[x1]);
+                *o = std::array::from_fn(|k| {
+                    let upper = u32::from(a[k]) * (WEIGHT_ONE - wx) + u32::from(b[k]) * wx;
+                    let lower = u32::from(c[k]) * (WEIGHT_ONE - wx) + u32::from(d[k]) * wx;
+                    let sum = upper * (WEIGHT_ONE - wy) + lower * wy;
+                    ((sum + (1 << (2 * WEIGHT_BITS - 1))) >> (2 * WEIGHT_BITS)) as u8
+                });
+            }
+        });
     Image { width, height, pixels }
 }
 
@@ -286,7 +326,11 @@ mod tests {
     use super::*;
 
     fn ramp(width: u32, height: u32) -> Image<u32> {
-        Image { width, height, pixels: (0..width * height).collect() }
+        Image {
+            width,
+            height,
+            pixels: (0..width * height).collect(),
+        }
     }
 
     #[test]
@@ -294,7 +338,11 @@ mod tests {
         let cropped = ramp(5, 4).crop_border(1).expect("3×2 remain");
         assert_eq!(cropped.size(), (3, 2));
         assert_eq!(cropped.pixels, [6, 7, 8, 11, 12, 13]);
-        assert_eq!(ramp(4, 4).crop_border(2), None, "a border of half the side leaves nothing");
+        assert_eq!(
+            ramp(4, 4).crop_border(2),
+            None,
+            "a border of half the side leaves nothing"
+        );
     }
 
     #[test]
@@ -305,7 +353,11 @@ mod tests {
 
     #[test]
     fn bilinear_resize_by_two_averages_pixel_pairs() {
-        let src = Image { width: 4, height: 1, pixels: vec![[0; 3], [100; 3], [200; 3], [250; 3]] };
+        let src = Image {
+            width: 4,
+            height: 1,
+            pixels: vec![[0; 3], [100; 3], [200; 3], [250; 3]],
+        };
         let half = resize_bilinear_rgb(src, 2, 1);
         assert_eq!(half.pixels, [[50; 3], [225; 3]], "OpenCV samples at x = 0.5 and 2.5");
     }
@@ -315,7 +367,8 @@ mod tests {
         let values: Vec<u16> = vec![0, 1, 1000, 65535, 300, 7];
         let png = image::ImageBuffer::<image::Luma<u16>, _>::from_raw(3, 2, values.clone()).expect("3×2");
         let mut bytes = Vec::new();
-        png.write_to(&mut Cursor::new(&mut bytes), image::ImageFormat::Png).expect("encode");
+        png.write_to(&mut Cursor::new(&mut bytes), image::ImageFormat::Png)
+            .expect("encode");
         let decoded = grey16_from_bytes(&bytes, Path::new("x.png")).expect("decode");
         assert_eq!(decoded.pixels, values);
     }

@@ -20,10 +20,12 @@ use nalgebra::Isometry3;
 use crate::classes::REPLICA_BACKGROUND;
 use crate::config::DatasetConfig;
 use crate::dataset::FrameSource;
-use crate::dataset::camera_spec::{parse_numbers, read_intrinsics_json, world_from_camera_from_rows};
+use crate::dataset::camera_spec::{
+    intrinsics_problem, parse_numbers, read_intrinsics_json, world_from_camera_from_rows,
+};
 use crate::dataset::images::{
-    Image, check_depth_options, depth_m_from_raw, numbered_files, read_grey, read_grey16, read_rgb, require_size,
-    size_text,
+    Image, check_depth_options, depth_to_metres_in_place, numbered_files, read_grey, read_grey_as, read_rgb,
+    require_size, size_text,
 };
 use crate::error::{CatmapError, Result};
 use crate::frame::{CameraIntrinsics, InstanceLabel, InstanceMask, RgbdFrame};
@@ -49,7 +51,11 @@ impl Default for ReplicaOptions {
 impl ReplicaOptions {
     /// Options with the depth conversion of `config` and no camera override.
     pub fn from_config(config: &DatasetConfig) -> Self {
-        Self { camera: None, depth_scale: config.depth_scale, max_depth_m: config.max_depth_m }
+        Self {
+            camera: None,
+            depth_scale: config.depth_scale,
+            max_depth_m: config.max_depth_m,
+        }
     }
 }
 
@@ -101,15 +107,26 @@ pub fn resolve_replica_intrinsics(dir: &Path, camera: Option<CameraIntrinsics>) 
         return Ok(camera);
     }
     let json = dir.join("intrinsics.json");
-    if json.is_file() { read_intrinsics_json(&json) } else { Ok(CameraIntrinsics::REPLICA) }
+    if json.is_file() {
+        read_intrinsics_json(&json)
+    } else {
+        Ok(CameraIntrinsics::REPLICA)
+    }
 }
 
 /// Poses of the frames with file indices `indices` from `traj_w_c.txt` (line `i + 1` holds frame `i`).
 fn read_trajectory(path: &Path, indices: &[u64]) -> Result<Vec<Isometry3<f32>>> {
     let text = std::fs::read_to_string(path).map_err(|e| CatmapError::io(path, e))?;
     let lines: Vec<&str> = text.lines().collect();
-    let pose_count = lines.iter().rposition(|l| !l.trim().is_empty()).map_or(0, |last| last + 1);
-    let error = |line: usize, reason: String| CatmapError::Parse { path: path.to_path_buf(), line, reason };
+    let pose_count = lines
+        .iter()
+        .rposition(|l| !l.trim().is_empty())
+        .map_or(0, |last| last + 1);
+    let error = |line: usize, reason: String| CatmapError::Parse {
+        path: path.to_path_buf(),
+        line,
+        reason,
+    };
     indices
         .iter()
         .map(|&index| {
@@ -133,23 +150,44 @@ impl ReplicaSequence {
     pub fn open(dir: impl AsRef<Path>, options: &ReplicaOptions) -> Result<Self> {
         let dir = dir.as_ref().to_path_buf();
         if !dir.is_dir() {
-            return Err(CatmapError::layout(dir, "Replica sequence folder does not exist or is not a folder"));
+            return Err(CatmapError::layout(
+                dir,
+                "Replica sequence folder does not exist or is not a folder",
+            ));
         }
         check_depth_options(options.depth_scale, options.max_depth_m)?;
+        if let Some(problem) = options.camera.as_ref().and_then(intrinsics_problem) {
+            return Err(CatmapError::Config(format!("camera: {problem}")));
+        }
         let depth_dir = dir.join("depth");
-        let indices: Vec<u64> = numbered_files(&depth_dir, "depth_", ".png")?.into_iter().map(|(i, _)| i).collect();
+        let indices: Vec<u64> = numbered_files(&depth_dir, "depth_", ".png")?
+            .into_iter()
+            .map(|(i, _)| i)
+            .collect();
         if indices.is_empty() {
-            return Err(CatmapError::layout(depth_dir, "no depth_<i>.png files: the sequence has no frames"));
+            return Err(CatmapError::layout(
+                depth_dir,
+                "no depth_<i>.png files: the sequence has no frames",
+            ));
         }
         let intrinsics = resolve_replica_intrinsics(&dir, options.camera)?;
         let poses = read_trajectory(&dir.join("traj_w_c.txt"), &indices)?;
         let frames = indices
             .into_iter()
             .zip(poses)
-            .map(|(index, world_from_camera)| ReplicaFrame { index, world_from_camera })
+            .map(|(index, world_from_camera)| ReplicaFrame {
+                index,
+                world_from_camera,
+            })
             .collect::<Vec<_>>();
         tracing::debug!(dir = %dir.display(), frames = frames.len(), ?intrinsics, "opened Replica sequence");
-        Ok(Self { dir, intrinsics, frames, depth_scale: options.depth_scale, max_depth_m: options.max_depth_m })
+        Ok(Self {
+            dir,
+            intrinsics,
+            frames,
+            depth_scale: options.depth_scale,
+            max_depth_m: options.max_depth_m,
+        })
     }
 
     /// The sequence folder.
@@ -174,10 +212,10 @@ fn decode_frame_images(
     depth: &Path,
     class: &Path,
     instance: &Path,
-) -> Result<(Image<[u8; 3]>, Image<u16>, Image<u32>, Image<u32>)> {
+) -> Result<(Image<[u8; 3]>, Image<f32>, Image<u32>, Image<u16>)> {
     let ((rgb, depth), (class, instance)) = rayon::join(
-        || rayon::join(|| read_rgb(rgb), || read_grey16(depth)),
-        || rayon::join(|| read_grey(class), || read_grey(instance)),
+        || rayon::join(|| read_rgb(rgb), || read_grey_as::<f32>(depth)),
+        || rayon::join(|| read_grey(class), || read_grey_as::<u16>(instance)),
     );
     Ok((rgb?, depth?, class?, instance?))
 }
@@ -193,14 +231,17 @@ impl FrameSource for ReplicaSequence {
 
     fn read_frame(&self, position: usize) -> Result<RgbdFrame> {
         let Some(frame) = self.frames.get(position) else {
-            let reason = format!("frame position {position} is out of range: the sequence has {} frames", self.len());
+            let reason = format!(
+                "frame position {position} is out of range: the sequence has {} frames",
+                self.len()
+            );
             return Err(CatmapError::layout(&self.dir, reason));
         };
         let rgb_path = self.frame_path("rgb", frame.index);
         let depth_path = self.frame_path("depth", frame.index);
         let class_path = self.frame_path("semantic_class", frame.index);
         let instance_path = self.frame_path("semantic_instance", frame.index);
-        let (rgb, depth, classes, instances) =
+        let (rgb, mut depth, classes, instances) =
             decode_frame_images(&rgb_path, &depth_path, &class_path, &instance_path)?;
 
         let size = (self.intrinsics.width, self.intrinsics.height);
@@ -211,20 +252,28 @@ impl FrameSource for ReplicaSequence {
                 size_text(depth.size()),
                 size_text(size)
             );
-            return Err(CatmapError::Image { path: depth_path, reason });
+            return Err(CatmapError::Image {
+                path: depth_path,
+                reason,
+            });
         }
         let same_as_depth = "the depth image (and the camera)";
         require_size(&rgb, size, &rgb_path, same_as_depth)?;
         require_size(&classes, size, &class_path, same_as_depth)?;
         require_size(&instances, size, &instance_path, same_as_depth)?;
 
-        let labels = classes.pixels.iter().zip(&instances.pixels).map(|(&c, &i)| replica_label(c, i));
+        depth_to_metres_in_place(&mut depth.pixels, self.depth_scale, self.max_depth_m);
+        let labels = classes
+            .pixels
+            .iter()
+            .zip(&instances.pixels)
+            .map(|(&c, &i)| replica_label(c, u32::from(i)));
         Ok(RgbdFrame {
             index: FrameIndex(frame.index),
             world_from_camera: frame.world_from_camera,
             intrinsics: self.intrinsics,
             rgb: rgb.pixels,
-            depth_m: depth_m_from_raw(&depth.pixels, self.depth_scale, self.max_depth_m),
+            depth_m: depth.pixels,
             instances: InstanceMask::from_labels(labels),
             classes: classes.pixels.into_iter().map(ClassId).collect(),
         })
@@ -242,9 +291,17 @@ mod tests {
     #[test]
     fn background_classes_override_instance_ids() {
         assert_eq!(replica_label(40, 7), InstanceLabel::Background, "floor is background");
-        assert_eq!(replica_label(20, 0), InstanceLabel::Background, "instance 0 is no object");
+        assert_eq!(
+            replica_label(20, 0),
+            InstanceLabel::Background,
+            "instance 0 is no object"
+        );
         assert_eq!(replica_label(20, 7), InstanceLabel::Object(ObjectId(7)));
-        assert_eq!(replica_label(1000, 7), InstanceLabel::Object(ObjectId(7)), "large class ids are objects");
+        assert_eq!(
+            replica_label(1000, 7),
+            InstanceLabel::Object(ObjectId(7)),
+            "large class ids are objects"
+        );
         for class in REPLICA_BACKGROUND {
             assert!(is_background_class(class), "class {class} is background");
         }

@@ -30,7 +30,7 @@ use crate::classes::SCANNET_BACKGROUND;
 use crate::dataset::FrameSource;
 use crate::dataset::camera_spec::{parse_numbers, read_intrinsic_matrix, world_from_camera_from_rows};
 use crate::dataset::images::{
-    Image, check_depth_options, depth_m_from_raw, numbered_files, read_grey, read_grey16, read_rgb, read_size,
+    Image, check_depth_options, depth_to_metres_in_place, numbered_files, read_grey_as, read_rgb, read_size,
     require_size, resize_bilinear_rgb, resize_nearest, size_text,
 };
 use crate::error::{CatmapError, Result};
@@ -50,7 +50,11 @@ pub struct ScanNetOptions {
 
 impl Default for ScanNetOptions {
     fn default() -> Self {
-        Self { depth_scale: 1000.0, max_depth_m: 6.0, border_px: 10 }
+        Self {
+            depth_scale: 1000.0,
+            max_depth_m: 6.0,
+            border_px: 10,
+        }
     }
 }
 
@@ -99,7 +103,11 @@ enum PoseFile {
 /// Parses `pose/{n}.txt`: four lines of four numbers.
 fn read_pose(path: &Path) -> Result<PoseFile> {
     let text = std::fs::read_to_string(path).map_err(|e| CatmapError::io(path, e))?;
-    let error = |line: usize, reason: String| CatmapError::Parse { path: path.to_path_buf(), line, reason };
+    let error = |line: usize, reason: String| CatmapError::Parse {
+        path: path.to_path_buf(),
+        line,
+        reason,
+    };
     let mut rows = Vec::with_capacity(16);
     let mut row_count = 0;
     for (i, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
@@ -110,16 +118,24 @@ fn read_pose(path: &Path) -> Result<PoseFile> {
         row_count += 1;
         rows.extend(numbers);
     }
-    let rows: [f64; 16] = rows.try_into().map_err(|_| error(0, format!("expected 4 rows, found {row_count}")))?;
+    let rows: [f64; 16] = rows
+        .try_into()
+        .map_err(|_| error(0, format!("expected 4 rows, found {row_count}")))?;
     if rows.iter().any(|v| !v.is_finite()) {
         return Ok(PoseFile::NonFinite);
     }
-    world_from_camera_from_rows(&rows).map(PoseFile::Valid).map_err(|reason| error(0, reason))
+    world_from_camera_from_rows(&rows)
+        .map(PoseFile::Valid)
+        .map_err(|reason| error(0, reason))
 }
 
 /// Fails unless `dir` is a folder.
 fn require_dir(dir: &Path, what: &str) -> Result<()> {
-    if dir.is_dir() { Ok(()) } else { Err(CatmapError::layout(dir, format!("{what} folder does not exist"))) }
+    if dir.is_dir() {
+        Ok(())
+    } else {
+        Err(CatmapError::layout(dir, format!("{what} folder does not exist")))
+    }
 }
 
 impl ScanNetSequence {
@@ -138,15 +154,20 @@ impl ScanNetSequence {
         for (number, _) in &depth_files {
             let pose_path = dir.join("pose").join(format!("{number}.txt"));
             match read_pose(&pose_path)? {
-                PoseFile::Valid(world_from_camera) => frames.push(ScanNetFrame { number: *number, world_from_camera }),
+                PoseFile::Valid(world_from_camera) => frames.push(ScanNetFrame {
+                    number: *number,
+                    world_from_camera,
+                }),
                 PoseFile::NonFinite => {
                     tracing::warn!(file = %pose_path.display(), "skipping frame: pose has an infinite or NaN entry");
                 }
             }
         }
         let Some(first) = frames.first() else {
-            let reason =
-                format!("no frame has both a depth image and a finite pose ({} depth files)", depth_files.len());
+            let reason = format!(
+                "no frame has both a depth image and a finite pose ({} depth files)",
+                depth_files.len()
+            );
             return Err(CatmapError::layout(dir.join("depth"), reason));
         };
         let first_depth = dir.join("depth").join(format!("{}.png", first.number));
@@ -155,13 +176,29 @@ impl ScanNetSequence {
         let crop = |side: u32| border.checked_mul(2).and_then(|b| side.checked_sub(b));
         let cropped = (crop(depth_size.0), crop(depth_size.1));
         let (Some(width @ 1..), Some(height @ 1..)) = cropped else {
-            let reason = format!("a {border}-pixel border leaves nothing of a {} image", size_text(depth_size));
-            return Err(CatmapError::Image { path: first_depth, reason });
+            let reason = format!(
+                "a {border}-pixel border leaves nothing of a {} image",
+                size_text(depth_size)
+            );
+            return Err(CatmapError::Image {
+                path: first_depth,
+                reason,
+            });
         };
         let full = read_intrinsic_matrix(&dir.join("intrinsic").join("intrinsic_depth.txt"), width, height)?;
-        let intrinsics = CameraIntrinsics { cx: full.cx - border as f32, cy: full.cy - border as f32, ..full };
+        let intrinsics = CameraIntrinsics {
+            cx: full.cx - border as f32,
+            cy: full.cy - border as f32,
+            ..full
+        };
         tracing::debug!(dir = %dir.display(), frames = frames.len(), ?intrinsics, "opened ScanNet sequence");
-        Ok(Self { dir, depth_size, intrinsics, frames, options: options.clone() })
+        Ok(Self {
+            dir,
+            depth_size,
+            intrinsics,
+            frames,
+            options: options.clone(),
+        })
     }
 
     /// The sequence folder.
@@ -186,13 +223,17 @@ impl ScanNetSequence {
             .filter(|c| c.size() == (self.intrinsics.width, self.intrinsics.height));
         cropped.map(|c| c.pixels).ok_or_else(|| CatmapError::Image {
             path: path.to_path_buf(),
-            reason: format!("cannot crop a {}-pixel border from {}", self.options.border_px, size_text(image.size())),
+            reason: format!(
+                "cannot crop a {}-pixel border from {}",
+                self.options.border_px,
+                size_text(image.size())
+            ),
         })
     }
 
     /// Depth: must have the size of the sequence's first depth image; cropped.
-    fn load_depth(&self, path: &Path) -> Result<Vec<u16>> {
-        let depth = read_grey16(path)?;
+    fn load_depth(&self, path: &Path) -> Result<Vec<f32>> {
+        let depth = read_grey_as::<f32>(path)?;
         require_size(&depth, self.depth_size, path, "the sequence's first depth image")?;
         self.crop(&depth, path)
     }
@@ -204,9 +245,9 @@ impl ScanNetSequence {
     }
 
     /// Instance or label ids: resized to the depth size with vMAP's `INTER_NEAREST`, then cropped.
-    fn load_ids(&self, path: &Path) -> Result<Vec<u32>> {
+    fn load_ids<T: From<u16> + Copy + Default>(&self, path: &Path) -> Result<Vec<T>> {
         let (width, height) = self.depth_size;
-        self.crop(&resize_nearest(read_grey(path)?, width, height), path)
+        self.crop(&resize_nearest(read_grey_as::<T>(path)?, width, height), path)
     }
 }
 
@@ -221,7 +262,10 @@ impl FrameSource for ScanNetSequence {
 
     fn read_frame(&self, position: usize) -> Result<RgbdFrame> {
         let Some(frame) = self.frames.get(position) else {
-            let reason = format!("frame position {position} is out of range: the sequence has {} frames", self.len());
+            let reason = format!(
+                "frame position {position} is out of range: the sequence has {} frames",
+                self.len()
+            );
             return Err(CatmapError::layout(&self.dir, reason));
         };
         let n = frame.number;
@@ -236,18 +280,29 @@ impl FrameSource for ScanNetSequence {
             || {
                 rayon::join(
                     || self.load_depth(&depth_path),
-                    || rayon::join(|| self.load_ids(&instance_path), || self.load_ids(&label_path)),
+                    || {
+                        rayon::join(
+                            || self.load_ids::<u16>(&instance_path),
+                            || self.load_ids::<u32>(&label_path),
+                        )
+                    },
                 )
             },
         );
-        let (color, depth, instances, labels) = (color?, depth?, instances?, labels?);
-        let mask = InstanceMask::from_labels(instances.iter().zip(&labels).map(|(&i, &l)| scannet_label(i, l)));
+        let (color, mut depth, instances, labels) = (color?, depth?, instances?, labels?);
+        depth_to_metres_in_place(&mut depth, self.options.depth_scale, self.options.max_depth_m);
+        let mask = InstanceMask::from_labels(
+            instances
+                .iter()
+                .zip(&labels)
+                .map(|(&i, &l)| scannet_label(u32::from(i), l)),
+        );
         Ok(RgbdFrame {
             index: FrameIndex(n),
             world_from_camera: frame.world_from_camera,
             intrinsics: self.intrinsics,
             rgb: color,
-            depth_m: depth_m_from_raw(&depth, self.options.depth_scale, self.options.max_depth_m),
+            depth_m: depth,
             instances: mask,
             classes: labels.into_iter().map(ClassId).collect(),
         })
@@ -264,9 +319,25 @@ mod tests {
 
     #[test]
     fn instance_ids_shift_by_one_and_background_labels_win() {
-        assert_eq!(scannet_label(3, 5), InstanceLabel::Object(ObjectId(4)), "vMAP shifts ids by +1");
-        assert_eq!(scannet_label(3, 1), InstanceLabel::Background, "label 1 (wall) is background");
-        assert_eq!(scannet_label(0, 0), InstanceLabel::Background, "unannotated pixels are background");
-        assert_eq!(scannet_label(0, 5), InstanceLabel::Unknown, "a labelled pixel of no instance is unknown");
+        assert_eq!(
+            scannet_label(3, 5),
+            InstanceLabel::Object(ObjectId(4)),
+            "vMAP shifts ids by +1"
+        );
+        assert_eq!(
+            scannet_label(3, 1),
+            InstanceLabel::Background,
+            "label 1 (wall) is background"
+        );
+        assert_eq!(
+            scannet_label(0, 0),
+            InstanceLabel::Background,
+            "unannotated pixels are background"
+        );
+        assert_eq!(
+            scannet_label(0, 5),
+            InstanceLabel::Unknown,
+            "a labelled pixel of no instance is unknown"
+        );
     }
 }

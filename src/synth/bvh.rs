@@ -46,7 +46,11 @@ struct PreparedTriangle {
 
 impl PreparedTriangle {
     fn new([a, b, c]: [Point3<f32>; 3]) -> Self {
-        Self { v0: a.coords, e1: b - a, e2: c - a }
+        Self {
+            v0: a.coords,
+            e1: b - a,
+            e2: c - a,
+        }
     }
 
     /// Ray parameter of the intersection in `(T_MIN, t_max)`, if any.
@@ -81,7 +85,10 @@ struct Bounds {
 }
 
 impl Bounds {
-    const EMPTY: Self = Self { min: [f32::INFINITY; 3], max: [f32::NEG_INFINITY; 3] };
+    const EMPTY: Self = Self {
+        min: [f32::INFINITY; 3],
+        max: [f32::NEG_INFINITY; 3],
+    };
 
     fn grow_point(&mut self, p: &Point3<f32>) {
         for k in 0..3 {
@@ -103,17 +110,28 @@ impl Bounds {
         e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
     }
 
-    /// Entry distance of the ray into the box if it enters before `t_max`.
-    #[inline]
-    fn entry(&self, origin: &Vector3<f32>, inv_dir: &Vector3<f32>, t_max: f32) -> Option<f32> {
+    /// Distance at which the ray enters the box, or `f32::INFINITY` when it misses the box or
+    /// enters it only at or after `t_max`. Plain comparisons (not `f32::min`) keep this cheap; a NaN
+    /// slab (origin on a plane the ray is parallel to) fails every comparison and constrains nothing.
+    #[inline(always)]
+    fn entry(&self, origin: &[f32; 3], inv_dir: &[f32; 3], t_max: f32) -> f32 {
         let (mut near, mut far) = (T_MIN, t_max);
         for k in 0..3 {
             let t0 = (self.min[k] - origin[k]) * inv_dir[k];
             let t1 = (self.max[k] - origin[k]) * inv_dir[k];
-            near = near.max(t0.min(t1));
-            far = far.min(t0.max(t1));
+            let (lo, hi) = if t0 < t1 { (t0, t1) } else { (t1, t0) };
+            if lo > near {
+                near = lo;
+            }
+            if hi < far {
+                far = hi;
+            }
         }
-        (near <= far).then_some(near)
+        if near <= far && near < t_max {
+            near
+        } else {
+            f32::INFINITY
+        }
     }
 }
 
@@ -125,13 +143,6 @@ struct Node {
     first: u32,
     count: u32,
 }
-
-/// scratch
-pub static NODES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-/// scratch
-pub static TRIS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-/// scratch
-pub fn node_count(b: &Bvh) -> (usize, usize, usize) { let leaves: Vec<_> = b.nodes.iter().filter(|n| n.count > 0).collect(); (b.nodes.len(), leaves.len(), leaves.iter().map(|n| n.count as usize).max().unwrap_or(0)) }
 
 /// Bounding volume hierarchy over a fixed list of triangles.
 #[derive(Debug, Clone)]
@@ -160,14 +171,25 @@ impl Bvh {
                 let mut bounds = Bounds::EMPTY;
                 tri.iter().for_each(|p| bounds.grow_point(p));
                 let centroid = [0, 1, 2].map(|k| (tri[0][k] + tri[1][k] + tri[2][k]) / 3.0);
-                BuildItem { bounds, centroid, index: u32::try_from(i).expect("fewer than 2³² triangles") }
+                BuildItem {
+                    bounds,
+                    centroid,
+                    index: u32::try_from(i).expect("fewer than 2³² triangles"),
+                }
             })
             .collect();
         let mut nodes = Vec::with_capacity(2 * items.len().max(1));
         build_node(&mut items, 0, 0, &mut nodes);
         let original: Vec<u32> = items.iter().map(|it| it.index).collect();
-        let triangles = original.iter().map(|&i| PreparedTriangle::new(triangles[i as usize])).collect();
-        Self { nodes, triangles, original }
+        let triangles = original
+            .iter()
+            .map(|&i| PreparedTriangle::new(triangles[i as usize]))
+            .collect();
+        Self {
+            nodes,
+            triangles,
+            original,
+        }
     }
 
     /// Number of triangles.
@@ -185,46 +207,50 @@ impl Bvh {
         if self.triangles.is_empty() {
             return None;
         }
-        let origin = ray.origin.coords;
-        let inv_dir = ray.direction.map(|d| 1.0 / d);
+        let origin = [ray.origin.x, ray.origin.y, ray.origin.z];
+        let inv_dir = [1.0 / ray.direction.x, 1.0 / ray.direction.y, 1.0 / ray.direction.z];
+        let (o, d) = (ray.origin.coords, ray.direction);
         let mut best: Option<(f32, usize)> = None;
         let mut best_t = t_max;
-        let mut stack = [0_u32; 64];
+        // Pending nodes with the distance at which the ray enters them.
+        let mut stack = [(0_u32, 0.0_f32); 64];
+        stack[0] = (0, self.nodes[0].bounds.entry(&origin, &inv_dir, t_max));
         let mut depth = 1;
         while depth > 0 {
-            NODES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             depth -= 1;
-            let node = &self.nodes[stack[depth] as usize];
-            if node.bounds.entry(&origin, &inv_dir, best_t).is_none() {
-                continue;
+            let (index, entry) = stack[depth];
+            if entry >= best_t {
+                continue; // missed, or a nearer hit was found after this node was queued
             }
+            let node = &self.nodes[index as usize];
             if node.count > 0 {
-                let range = node.first as usize..(node.first + node.count) as usize;
-                TRIS.fetch_add(range.len() as u64, std::sync::atomic::Ordering::Relaxed);
-                for i in range {
-                    if let Some(t) = self.triangles[i].intersect(&origin, &ray.direction, best_t) {
+                for i in node.first as usize..(node.first + node.count) as usize {
+                    if let Some(t) = self.triangles[i].intersect(&o, &d, best_t) {
                         best_t = t;
                         best = Some((t, i));
                     }
                 }
                 continue;
             }
-            let left = stack[depth] + 1;
-            let right = node.first;
+            let (left, right) = (index + 1, node.first);
             let t_left = self.nodes[left as usize].bounds.entry(&origin, &inv_dir, best_t);
             let t_right = self.nodes[right as usize].bounds.entry(&origin, &inv_dir, best_t);
-            // Push the farther child first so the nearer one is visited next.
-            let order = match (t_left, t_right) {
-                (Some(l), Some(r)) if r < l => [Some(left), Some(right)],
-                (l, r) => [r.map(|_| right), l.map(|_| left)],
+            // Push the farther child first so that the nearer one is visited next; a missed child
+            // (infinite entry) is pushed too and dropped when popped.
+            let (near, far) = if t_right < t_left {
+                ((right, t_right), (left, t_left))
+            } else {
+                ((left, t_left), (right, t_right))
             };
-            for child in order.into_iter().flatten() {
-                debug_assert!(depth < stack.len(), "BVH deeper than the traversal stack");
-                stack[depth] = child;
-                depth += 1;
-            }
+            debug_assert!(depth + 2 <= stack.len(), "BVH deeper than the traversal stack");
+            stack[depth] = far;
+            stack[depth + 1] = near;
+            depth += 2;
         }
-        best.map(|(t, i)| Hit { t, triangle: self.original[i] })
+        best.map(|(t, i)| Hit {
+            t,
+            triangle: self.original[i],
+        })
     }
 }
 
@@ -234,7 +260,11 @@ fn build_node(items: &mut [BuildItem], offset: usize, depth: usize, nodes: &mut 
     let mut bounds = Bounds::EMPTY;
     items.iter().for_each(|it| bounds.grow(&it.bounds));
     let node_index = nodes.len();
-    let leaf = Node { bounds, first: offset as u32, count: items.len() as u32 };
+    let leaf = Node {
+        bounds,
+        first: offset as u32,
+        count: items.len() as u32,
+    };
     nodes.push(leaf);
     if items.len() <= 2 || depth >= MAX_DEPTH {
         return node_index as u32;
@@ -247,7 +277,11 @@ fn build_node(items: &mut [BuildItem], offset: usize, depth: usize, nodes: &mut 
     let (left, right) = items.split_at_mut(split);
     build_node(left, offset, depth + 1, nodes);
     let right_index = build_node(right, offset + split, depth + 1, nodes);
-    nodes[node_index] = Node { bounds, first: right_index, count: 0 };
+    nodes[node_index] = Node {
+        bounds,
+        first: right_index,
+        count: 0,
+    };
     node_index as u32
 }
 
@@ -255,7 +289,9 @@ fn build_node(items: &mut [BuildItem], offset: usize, depth: usize, nodes: &mut 
 /// when staying a leaf is cheaper (or no plane separates the centroids).
 fn best_sah_split(items: &mut [BuildItem], bounds: &Bounds) -> Option<usize> {
     let mut centroid_bounds = Bounds::EMPTY;
-    items.iter().for_each(|it| centroid_bounds.grow_point(&Point3::from(it.centroid)));
+    items
+        .iter()
+        .for_each(|it| centroid_bounds.grow_point(&Point3::from(it.centroid)));
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bins left of the plane)
     for axis in 0..3 {
         let (lo, hi) = (centroid_bounds.min[axis], centroid_bounds.max[axis]);
@@ -304,7 +340,9 @@ fn bin_index(c: f32, lo: f32, hi: f32) -> usize {
 fn median_split(items: &mut [BuildItem]) -> usize {
     let mut cb = Bounds::EMPTY;
     items.iter().for_each(|it| cb.grow_point(&Point3::from(it.centroid)));
-    let axis = (0..3).max_by(|&a, &b| (cb.max[a] - cb.min[a]).total_cmp(&(cb.max[b] - cb.min[b]))).unwrap_or(0);
+    let axis = (0..3)
+        .max_by(|&a, &b| (cb.max[a] - cb.min[a]).total_cmp(&(cb.max[b] - cb.min[b])))
+        .unwrap_or(0);
     let mid = items.len() / 2;
     items.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
     mid
@@ -332,7 +370,11 @@ mod tests {
         let (o, d) = (ray.origin.coords, ray.direction);
         tris.iter()
             .enumerate()
-            .filter_map(|(i, tri)| PreparedTriangle::new(*tri).intersect(&o, &d, f32::INFINITY).map(|t| (t, i)))
+            .filter_map(|(i, tri)| {
+                PreparedTriangle::new(*tri)
+                    .intersect(&o, &d, f32::INFINITY)
+                    .map(|t| (t, i))
+            })
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map(|(t, i)| Hit { t, triangle: i as u32 })
     }
@@ -342,10 +384,20 @@ mod tests {
         let tri = PreparedTriangle::new([[0.0, 0.0, 2.0], [1.0, 0.0, 2.0], [0.0, 1.0, 2.0]].map(Point3::from));
         let origin = Vector3::new(0.2, 0.2, 0.0);
         // Unnormalised direction: t is in units of the direction (here z = 1, so t = depth).
-        assert_eq!(tri.intersect(&origin, &Vector3::new(0.0, 0.0, 1.0), f32::INFINITY), Some(2.0));
+        assert_eq!(
+            tri.intersect(&origin, &Vector3::new(0.0, 0.0, 1.0), f32::INFINITY),
+            Some(2.0)
+        );
         let behind = Vector3::new(0.2, 0.2, 4.0);
-        assert_eq!(tri.intersect(&behind, &Vector3::new(0.0, 0.0, -2.0), f32::INFINITY), Some(1.0));
-        assert_eq!(tri.intersect(&Vector3::new(0.8, 0.8, 0.0), &Vector3::z(), f32::INFINITY), None, "outside");
+        assert_eq!(
+            tri.intersect(&behind, &Vector3::new(0.0, 0.0, -2.0), f32::INFINITY),
+            Some(1.0)
+        );
+        assert_eq!(
+            tri.intersect(&Vector3::new(0.8, 0.8, 0.0), &Vector3::z(), f32::INFINITY),
+            None,
+            "outside"
+        );
         assert_eq!(tri.intersect(&origin, &Vector3::z(), 1.5), None, "beyond t_max");
         assert_eq!(tri.intersect(&origin, &Vector3::x(), f32::INFINITY), None, "parallel");
     }
@@ -353,7 +405,13 @@ mod tests {
     #[test]
     fn bvh_agrees_with_brute_force_on_random_rays() {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
-        let mut p = |s: f32| Point3::new(rng.random_range(-s..s), rng.random_range(-s..s), rng.random_range(-s..s));
+        let mut p = |s: f32| {
+            Point3::new(
+                rng.random_range(-s..s),
+                rng.random_range(-s..s),
+                rng.random_range(-s..s),
+            )
+        };
         let tris: Vec<[Point3<f32>; 3]> = (0..500)
             .map(|_| {
                 let c = p(2.0);
@@ -364,7 +422,10 @@ mod tests {
         assert_eq!(bvh.len(), tris.len());
         let mut hits = 0;
         for _ in 0..2000 {
-            let ray = Ray { origin: p(3.0), direction: p(1.0).coords };
+            let ray = Ray {
+                origin: p(3.0),
+                direction: p(1.0).coords,
+            };
             let (expected, got) = (brute_force(&tris, &ray), bvh.nearest_hit(&ray, f32::INFINITY));
             assert_eq!(got.map(|h| h.triangle), expected.map(|h| h.triangle), "ray {ray:?}");
             hits += usize::from(got.is_some());
@@ -374,7 +435,10 @@ mod tests {
 
     #[test]
     fn empty_and_degenerate_inputs_do_not_panic() {
-        let ray = Ray { origin: Point3::origin(), direction: Vector3::z() };
+        let ray = Ray {
+            origin: Point3::origin(),
+            direction: Vector3::z(),
+        };
         assert_eq!(Bvh::build(&[]).nearest_hit(&ray, f32::INFINITY), None);
         let same = [[Point3::new(0.0, 0.0, 1.0); 3]; 40];
         assert_eq!(Bvh::build(&same).nearest_hit(&ray, f32::INFINITY), None);

@@ -52,7 +52,11 @@ impl SceneDescription {
                 observed_surface_fraction: observed.get(&o.id).copied().unwrap_or(0.0),
             })
             .collect();
-        Self { seed: scene.seed(), preset: scene.preset(), objects }
+        Self {
+            seed: scene.seed(),
+            preset: scene.preset(),
+            objects,
+        }
     }
 }
 
@@ -77,7 +81,10 @@ mod tests {
 
     #[test]
     fn designs_and_presets_serialise_as_lowercase_names() {
-        assert_eq!(serde_json::to_string(&Design::SwivelChair).expect("json"), "\"swivel_chair\"");
+        assert_eq!(
+            serde_json::to_string(&Design::SwivelChair).expect("json"),
+            "\"swivel_chair\""
+        );
         assert_eq!(serde_json::to_string(&Preset::Small).expect("json"), "\"small\"");
     }
 }

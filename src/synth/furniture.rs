@@ -132,15 +132,30 @@ fn swivel_chair() -> Vec<TriangleMesh> {
     for k in 0..5 {
         let a = TAU * k as f32 / 5.0 + FRAC_PI_4;
         let (s, c) = a.sin_cos();
-        let arm = beam(Point3::new(0.04 * c, 0.04 * s, 0.05), Point3::new(0.3 * c, 0.3 * s, 0.05), 0.04);
+        let arm = beam(
+            Point3::new(0.04 * c, 0.04 * s, 0.05),
+            Point3::new(0.3 * c, 0.3 * s, 0.05),
+            0.04,
+        );
         parts.push(paint(arm, METAL_DARK));
-        parts.push(paint(cylinder(Point3::new(0.28 * c, 0.28 * s, 0.0), 0.025, 0.03, 10), METAL_DARK));
+        parts.push(paint(
+            cylinder(Point3::new(0.28 * c, 0.28 * s, 0.0), 0.025, 0.03, 10),
+            METAL_DARK,
+        ));
     }
-    parts.push(paint(cylinder(Point3::new(0.0, 0.0, 0.09), 0.025, 0.31, 12), [150, 150, 155]));
+    parts.push(paint(
+        cylinder(Point3::new(0.0, 0.0, 0.09), 0.025, 0.31, 12),
+        [150, 150, 155],
+    ));
     parts.push(paint(cylinder(Point3::new(0.0, 0.0, 0.40), 0.24, 0.07, 28), fabric));
     let support = beam(Point3::new(0.0, -0.19, 0.47), Point3::new(0.0, -0.235, 0.60), 0.04);
     parts.push(paint(support, METAL_DARK));
-    let back = curved_panel((0.22, 0.26), (200f32.to_radians(), 340f32.to_radians()), (0.56, 0.84), 14);
+    let back = curved_panel(
+        (0.22, 0.26),
+        (200f32.to_radians(), 340f32.to_radians()),
+        (0.56, 0.84),
+        14,
+    );
     parts.push(paint(back, fabric));
     parts
 }
@@ -164,7 +179,10 @@ fn cabinet() -> Vec<TriangleMesh> {
         paint(block(0.0, 0.0, 0.06, [0.8, 0.45, 1.14]), [225, 220, 205]),
     ];
     for s in [-1.0, 1.0] {
-        parts.push(paint(block(s * 0.1975, 0.2325, 0.08, [0.385, 0.015, 1.1]), [236, 233, 222]));
+        parts.push(paint(
+            block(s * 0.1975, 0.2325, 0.08, [0.385, 0.015, 1.1]),
+            [236, 233, 222],
+        ));
         parts.push(paint(block(s * 0.05, 0.255, 0.55, [0.02, 0.03, 0.15]), [60, 60, 60]));
     }
     parts
@@ -181,13 +199,19 @@ fn floor_lamp() -> Vec<TriangleMesh> {
     vec![
         paint(cylinder(Point3::origin(), 0.16, 0.03, 24), METAL_DARK),
         paint(cylinder(Point3::new(0.0, 0.0, 0.03), 0.013, 1.27, 8), [190, 190, 195]),
-        paint(frustum(Point3::new(0.0, 0.0, 1.30), 0.22, 0.14, 0.32, 24), [240, 228, 195]),
+        paint(
+            frustum(Point3::new(0.0, 0.0, 1.30), 0.22, 0.14, 0.32, 24),
+            [240, 228, 195],
+        ),
     ]
 }
 
 fn stool() -> Vec<TriangleMesh> {
     let metal = [70, 70, 75];
-    let mut parts = vec![paint(cylinder(Point3::new(0.0, 0.0, 0.60), 0.17, 0.04, 24), [150, 50, 40])];
+    let mut parts = vec![paint(
+        cylinder(Point3::new(0.0, 0.0, 0.60), 0.17, 0.04, 24),
+        [150, 50, 40],
+    )];
     let corner = |r: f32, k: usize, z: f32| {
         let (s, c) = (FRAC_PI_4 + TAU * k as f32 / 4.0).sin_cos();
         Point3::new(r * c, r * s, z)
@@ -196,8 +220,14 @@ fn stool() -> Vec<TriangleMesh> {
     // its 3 cm foot (half-diagonal 0.015·√2) touches the floor.
     let foot_lift = 0.015 * SQRT_2 * 0.08_f32.atan2(0.60).sin();
     for k in 0..4 {
-        parts.push(paint(beam(corner(0.19, k, foot_lift), corner(0.11, k, 0.60), 0.03), metal));
-        parts.push(paint(beam(corner(0.155, k, 0.25), corner(0.155, (k + 1) % 4, 0.25), 0.02), metal));
+        parts.push(paint(
+            beam(corner(0.19, k, foot_lift), corner(0.11, k, 0.60), 0.03),
+            metal,
+        ));
+        parts.push(paint(
+            beam(corner(0.155, k, 0.25), corner(0.155, (k + 1) % 4, 0.25), 0.02),
+            metal,
+        ));
     }
     parts
 }
@@ -233,9 +263,22 @@ mod tests {
         for design in Design::ALL {
             let b = design.mesh().bounds().expect("design has vertices");
             let e = b.extent();
-            assert!(b.min.z.abs() < 1e-4, "{} stands on z = 0, min z = {}", design.name(), b.min.z);
-            assert!(e.x < 1.7 && e.y < 1.0 && e.z < 1.7, "{} fits a room: {e:?}", design.name());
-            assert!((b.center().x).abs() < 0.02 && (b.center().y).abs() < 0.05, "{} is centred", design.name());
+            assert!(
+                b.min.z.abs() < 1e-4,
+                "{} stands on z = 0, min z = {}",
+                design.name(),
+                b.min.z
+            );
+            assert!(
+                e.x < 1.7 && e.y < 1.0 && e.z < 1.7,
+                "{} fits a room: {e:?}",
+                design.name()
+            );
+            assert!(
+                (b.center().x).abs() < 0.02 && (b.center().y).abs() < 0.05,
+                "{} is centred",
+                design.name()
+            );
         }
         let table = Design::DiningTable.mesh().bounds().expect("table");
         assert!((table.max.z - 0.75).abs() < 1e-6, "table is 0.75 m high");
@@ -246,7 +289,10 @@ mod tests {
         let a = Design::LadderBackChair.mesh().bounds().expect("chair A");
         let b = Design::SwivelChair.mesh().bounds().expect("chair B");
         assert!(a.max.z > b.max.z + 0.05, "the ladder-back is the taller chair");
-        assert!(b.extent().x > a.extent().x + 0.1, "the star base is wider than the legs");
+        assert!(
+            b.extent().x > a.extent().x + 0.1,
+            "the star base is wider than the legs"
+        );
         assert!(Design::LadderBackChair.is_chair() && Design::SwivelChair.is_chair());
     }
 

@@ -46,17 +46,24 @@ impl SceneGeometry {
         for (label, mesh) in surfaces {
             for (t, tri) in mesh.triangles.iter().enumerate() {
                 let c = mesh.corners(t);
-                let normal = (c[1] - c[0]).cross(&(c[2] - c[0])).try_normalize(1e-12).unwrap_or_else(Vector3::z);
-                let color = mesh.colors.as_ref().map_or(UNCOLOURED, |colors| colors[tri[0] as usize]);
+                let normal = (c[1] - c[0])
+                    .cross(&(c[2] - c[0]))
+                    .try_normalize(1e-12)
+                    .unwrap_or_else(Vector3::z);
+                let color = mesh
+                    .colors
+                    .as_ref()
+                    .map_or(UNCOLOURED, |colors| colors[tri[0] as usize]);
                 corners.push(c);
                 attributes.push(TriangleAttributes { normal, color, label });
             }
         }
-        Self { bvh: Bvh::build(&corners), attributes }
+        Self {
+            bvh: Bvh::build(&corners),
+            attributes,
+        }
     }
 
-    /// scratch
-    pub fn bvh(&self) -> &Bvh { &self.bvh }
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.attributes.len()
@@ -66,7 +73,12 @@ impl SceneGeometry {
     pub fn cast(&self, origin: Point3<f32>, direction: Vector3<f32>, t_max: f32) -> Option<SurfaceHit> {
         let hit = self.bvh.nearest_hit(&Ray { origin, direction }, t_max)?;
         let a = &self.attributes[hit.triangle as usize];
-        Some(SurfaceHit { t: hit.t, normal: a.normal, color: a.color, label: a.label })
+        Some(SurfaceHit {
+            t: hit.t,
+            normal: a.normal,
+            color: a.color,
+            label: a.label,
+        })
     }
 }
 
@@ -83,14 +95,26 @@ mod tests {
         };
         let near = square(1.0).with_uniform_color([9, 8, 7]);
         let far = square(2.0);
-        let (near_label, far_label) =
-            (SurfaceLabel { instance_id: 1, class: ClassId(20) }, SurfaceLabel { instance_id: 2, class: ClassId(80) });
+        let (near_label, far_label) = (
+            SurfaceLabel {
+                instance_id: 1,
+                class: ClassId(20),
+            },
+            SurfaceLabel {
+                instance_id: 2,
+                class: ClassId(80),
+            },
+        );
         let geometry = SceneGeometry::build([(far_label, &far), (near_label, &near)]);
         assert_eq!(geometry.triangle_count(), 4);
-        let hit = geometry.cast(Point3::origin(), Vector3::new(0.1, 0.2, 1.0), f32::INFINITY).expect("hits");
+        let hit = geometry
+            .cast(Point3::origin(), Vector3::new(0.1, 0.2, 1.0), f32::INFINITY)
+            .expect("hits");
         assert_eq!((hit.label, hit.color), (near_label, [9, 8, 7]));
         assert!((hit.t - 1.0).abs() < 1e-6 && (hit.normal.norm() - 1.0).abs() < 1e-6);
-        let behind = geometry.cast(Point3::new(0.0, 0.0, 1.5), Vector3::z(), f32::INFINITY).expect("hits");
+        let behind = geometry
+            .cast(Point3::new(0.0, 0.0, 1.5), Vector3::z(), f32::INFINITY)
+            .expect("hits");
         assert_eq!((behind.label, behind.color), (far_label, UNCOLOURED));
     }
 }

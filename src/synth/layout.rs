@@ -50,7 +50,12 @@ impl Footprint {
         let mid = local.center();
         let center = Vector2::new(x, y) + axes[0] * mid.x + axes[1] * mid.y;
         let e = local.extent() / 2.0;
-        Self { center, axes, half: [e.x, e.y], z: [local.min.z, local.max.z] }
+        Self {
+            center,
+            axes,
+            half: [e.x, e.y],
+            z: [local.min.z, local.max.z],
+        }
     }
 
     fn radius_along(&self, axis: &Vector2<f32>) -> f32 {
@@ -62,9 +67,10 @@ impl Footprint {
             return false;
         }
         let d = other.center - self.center;
-        self.axes.iter().chain(&other.axes).all(|axis| {
-            d.dot(axis).abs() <= self.radius_along(axis) + other.radius_along(axis) + CLEARANCE_M
-        })
+        self.axes
+            .iter()
+            .chain(&other.axes)
+            .all(|axis| d.dot(axis).abs() <= self.radius_along(axis) + other.radius_along(axis) + CLEARANCE_M)
     }
 
     fn corners(&self) -> impl Iterator<Item = Vector2<f32>> + '_ {
@@ -95,18 +101,24 @@ pub fn place_furniture<R: Rng + ?Sized>(furnishing: &Furnishing, room: &Room, rn
 }
 
 /// The layout being built: placed poses by position in the furnishing, and their footprints.
-struct Scratch<'a> {
+struct Draft<'a> {
     shapes: &'a BTreeMap<Design, Vec<Aabb>>,
     floor: FloorRegion,
     poses: Vec<Option<(f32, f32, f32)>>,
     footprints: Vec<Footprint>,
 }
 
-impl Scratch<'_> {
+impl Draft<'_> {
     /// Adds `design` at `(x, y, yaw)` if it stays inside the walls and hits nothing placed.
     fn try_place(&mut self, slot: usize, design: Design, (x, y, yaw): (f32, f32, f32)) -> bool {
-        let new: Vec<Footprint> = self.shapes[&design].iter().map(|b| Footprint::new(b, x, y, yaw)).collect();
-        let inside = new.iter().flat_map(Footprint::corners).all(|c| self.floor.contains(c.x, c.y, 0.05));
+        let new: Vec<Footprint> = self.shapes[&design]
+            .iter()
+            .map(|b| Footprint::new(b, x, y, yaw))
+            .collect();
+        let inside = new
+            .iter()
+            .flat_map(Footprint::corners)
+            .all(|c| self.floor.contains(c.x, c.y, 0.05));
         if !inside || new.iter().any(|f| self.footprints.iter().any(|g| f.collides(g))) {
             return false;
         }
@@ -124,7 +136,12 @@ fn try_layout<R: Rng + ?Sized>(
 ) -> Option<Vec<Placement>> {
     let designs = &furnishing.designs;
     let region = room.furniture_region();
-    let mut scratch = Scratch { shapes, floor: room.floor(), poses: vec![None; designs.len()], footprints: Vec::new() };
+    let mut draft = Draft {
+        shapes,
+        floor: room.floor(),
+        poses: vec![None; designs.len()],
+        footprints: Vec::new(),
+    };
     let random_pose = |rng: &mut R| {
         let x = rng.random_range(region.min[0]..=region.max[0]);
         let y = rng.random_range(region.min[1]..=region.max[1]);
@@ -132,8 +149,8 @@ fn try_layout<R: Rng + ?Sized>(
     };
     let table = designs.iter().position(|&d| d == Design::DiningTable);
     if let Some(t) = table {
-        (0..TRIES_PER_OBJECT).find(|_| scratch.try_place(t, Design::DiningTable, random_pose(rng)))?;
-        let table_pose = scratch.poses[t]?;
+        (0..TRIES_PER_OBJECT).find(|_| draft.try_place(t, Design::DiningTable, random_pose(rng)))?;
+        let table_pose = draft.poses[t]?;
         let mut chairs: Vec<usize> = (0..designs.len()).filter(|&i| designs[i].is_chair()).collect();
         shuffle(&mut chairs, rng);
         let mut slots = table_slots();
@@ -142,19 +159,22 @@ fn try_layout<R: Rng + ?Sized>(
         for &chair in chairs.iter().take(furnishing.tucked_chairs) {
             // A slot that fits no tuck stays free; the chair then goes elsewhere below.
             free_slots.by_ref().find(|slot| {
-                (0..40).any(|_| scratch.try_place(chair, designs[chair], tucked_pose(table_pose, slot, rng)))
+                (0..40).any(|_| draft.try_place(chair, designs[chair], tucked_pose(table_pose, slot, rng)))
             });
         }
     }
     for (i, &design) in designs.iter().enumerate() {
-        if scratch.poses[i].is_none() {
-            (0..TRIES_PER_OBJECT).find(|_| scratch.try_place(i, design, random_pose(rng)))?;
+        if draft.poses[i].is_none() {
+            (0..TRIES_PER_OBJECT).find(|_| draft.try_place(i, design, random_pose(rng)))?;
         }
     }
-    let placements = designs.iter().zip(&scratch.poses).map(|(&design, pose)| {
+    let placements = designs.iter().zip(&draft.poses).map(|(&design, pose)| {
         let (x, y, yaw) = (*pose)?;
         let rotation = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw);
-        Some(Placement { design, world_from_object: Isometry3::from_parts(Translation3::new(x, y, 0.0), rotation) })
+        Some(Placement {
+            design,
+            world_from_object: Isometry3::from_parts(Translation3::new(x, y, 0.0), rotation),
+        })
     });
     placements.collect()
 }
@@ -198,41 +218,66 @@ mod tests {
     use super::*;
     use nalgebra::Point3;
     use rand::SeedableRng;
-    use std::f32::consts::PI;
     use rand_chacha::ChaCha8Rng;
+    use std::f32::consts::PI;
 
     fn footprint_corners(design: Design, world_from_object: &Isometry3<f32>) -> Vec<Point3<f32>> {
         let b = design.mesh().bounds().expect("design has vertices");
-        [(b.min.x, b.min.y), (b.max.x, b.min.y), (b.max.x, b.max.y), (b.min.x, b.max.y)]
-            .map(|(x, y)| world_from_object * Point3::new(x, y, 0.0))
-            .to_vec()
+        [
+            (b.min.x, b.min.y),
+            (b.max.x, b.min.y),
+            (b.max.x, b.max.y),
+            (b.min.x, b.max.y),
+        ]
+        .map(|(x, y)| world_from_object * Point3::new(x, y, 0.0))
+        .to_vec()
     }
 
     #[test]
     fn overlapping_rotated_boxes_collide_and_separated_ones_do_not() {
-        let unit = Aabb { min: Point3::new(-0.5, -0.5, 0.0), max: Point3::new(0.5, 0.5, 1.0) };
+        let unit = Aabb {
+            min: Point3::new(-0.5, -0.5, 0.0),
+            max: Point3::new(0.5, 0.5, 1.0),
+        };
         let a = Footprint::new(&unit, 0.0, 0.0, 0.0);
         assert!(a.collides(&Footprint::new(&unit, 0.9, 0.0, 0.3)));
         assert!(!a.collides(&Footprint::new(&unit, 1.3, 0.0, 0.0)));
         // Rotated by 45° the square reaches 0.707 along x: 0.5 + 0.707 < 1.25.
         assert!(!a.collides(&Footprint::new(&unit, 1.25, 0.0, PI / 4.0)));
-        let above = Aabb { min: Point3::new(-0.5, -0.5, 1.0), max: Point3::new(0.5, 0.5, 2.0) };
-        assert!(!a.collides(&Footprint::new(&above, 0.0, 0.0, 0.0)), "stacked boxes only touch");
+        let above = Aabb {
+            min: Point3::new(-0.5, -0.5, 1.0),
+            max: Point3::new(0.5, 0.5, 2.0),
+        };
+        assert!(
+            !a.collides(&Footprint::new(&above, 0.0, 0.0, 0.0)),
+            "stacked boxes only touch"
+        );
     }
 
     #[test]
     fn placements_stay_in_the_room_and_tuck_chairs_under_the_table() {
-        let room = Room { half_x_m: 3.5, half_y_m: 3.0, height_m: 2.7 };
+        let room = Room {
+            half_x_m: 3.5,
+            half_y_m: 3.0,
+            height_m: 2.7,
+        };
         let furnishing = super::super::preset::Preset::Default.furnishing([0.9, 0.9]);
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let placed = place_furniture(&furnishing, &room, &mut rng).expect("the default room has space");
         assert_eq!(placed.len(), furnishing.designs.len());
         for p in &placed {
             for c in footprint_corners(p.design, &p.world_from_object) {
-                assert!(room.floor().contains(c.x, c.y, 0.0), "{} inside the walls", p.design.name());
+                assert!(
+                    room.floor().contains(c.x, c.y, 0.0),
+                    "{} inside the walls",
+                    p.design.name()
+                );
             }
         }
-        let table = placed.iter().find(|p| p.design == Design::DiningTable).expect("a table");
+        let table = placed
+            .iter()
+            .find(|p| p.design == Design::DiningTable)
+            .expect("a table");
         let table_from_world = table.world_from_object.inverse();
         // A seat (half depth ≥ 0.21 m) whose centre is within 0.2 m of the top's outline is partly under it.
         let under_table = placed.iter().filter(|p| {

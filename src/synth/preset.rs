@@ -50,7 +50,14 @@ impl Preset {
             Self::Default => (640, 480),
         };
         let f = 0.8 * width as f32;
-        CameraIntrinsics { width, height, fx: f, fy: f, cx: (width as f32 - 1.0) / 2.0, cy: (height as f32 - 1.0) / 2.0 }
+        CameraIntrinsics {
+            width,
+            height,
+            fx: f,
+            fy: f,
+            cx: (width as f32 - 1.0) / 2.0,
+            cy: (height as f32 - 1.0) / 2.0,
+        }
     }
 
     /// Number of frames of the trajectory.
@@ -64,19 +71,31 @@ impl Preset {
     /// The room.
     pub fn room(self) -> Room {
         match self {
-            Self::Small => Room { half_x_m: 2.5, half_y_m: 2.25, height_m: 2.6 },
-            Self::Default => Room { half_x_m: 3.5, half_y_m: 3.0, height_m: 2.7 },
+            Self::Small => Room {
+                half_x_m: 2.5,
+                half_y_m: 2.25,
+                height_m: 2.6,
+            },
+            Self::Default => Room {
+                half_x_m: 3.5,
+                half_y_m: 3.0,
+                height_m: 2.7,
+            },
         }
     }
 
     /// The furniture, given two numbers in `[0, 1)` drawn from the scene's generator (they pick
     /// the chair counts and how many chairs are tucked).
     pub fn furnishing(self, draws: [f32; 2]) -> Furnishing {
-        let pick = |draw: f32, options: &[usize]| options[((draw * options.len() as f32) as usize).min(options.len() - 1)];
+        let pick =
+            |draw: f32, options: &[usize]| options[((draw * options.len() as f32) as usize).min(options.len() - 1)];
         match self {
             Self::Small => Furnishing {
-                designs: [[Design::LadderBackChair; 3].as_slice(), &[Design::DiningTable, Design::Stool, Design::FloorLamp]]
-                    .concat(),
+                designs: [
+                    [Design::LadderBackChair; 3].as_slice(),
+                    &[Design::DiningTable, Design::Stool, Design::FloorLamp],
+                ]
+                .concat(),
                 tucked_chairs: pick(draws[0], &[1, 2]),
             },
             Self::Default => {
@@ -92,7 +111,10 @@ impl Preset {
                     Design::Stool,
                     Design::Nightstand,
                 ]);
-                Furnishing { designs, tucked_chairs: pick((draws[0] + draws[1]) / 2.0, &[2, 3]) }
+                Furnishing {
+                    designs,
+                    tucked_chairs: pick((draws[0] + draws[1]) / 2.0, &[2, 3]),
+                }
             }
         }
     }
@@ -137,6 +159,9 @@ mod tests {
         assert!("huge".parse::<Preset>().is_err());
         let k = Preset::Small.intrinsics();
         let hfov = 2.0 * (k.width as f32 / 2.0 / k.fx).atan();
-        assert!((60f32.to_radians()..70f32.to_radians()).contains(&hfov), "horizontal FOV {hfov}");
+        assert!(
+            (60f32.to_radians()..70f32.to_radians()).contains(&hfov),
+            "horizontal FOV {hfov}"
+        );
     }
 }

@@ -23,7 +23,14 @@ pub fn cuboid(min: [f32; 3], max: [f32; 3]) -> TriangleMesh {
             Point3::new(pick(0, 0), pick(1, 1), pick(2, 2))
         })
         .collect();
-    let faces = [[1, 3, 7, 5], [0, 4, 6, 2], [2, 6, 7, 3], [0, 1, 5, 4], [4, 5, 7, 6], [0, 2, 3, 1]];
+    let faces = [
+        [1, 3, 7, 5],
+        [0, 4, 6, 2],
+        [2, 6, 7, 3],
+        [0, 1, 5, 4],
+        [4, 5, 7, 6],
+        [0, 2, 3, 1],
+    ];
     let mut triangles = Vec::with_capacity(12);
     faces.into_iter().for_each(|f| push_quad(&mut triangles, f));
     TriangleMesh::new(vertices, triangles)
@@ -32,7 +39,10 @@ pub fn cuboid(min: [f32; 3], max: [f32; 3]) -> TriangleMesh {
 /// A box centred at `(cx, cy)` on the floor plane, `size` = (x, y, z) extents, from height `z0`.
 pub fn block(cx: f32, cy: f32, z0: f32, size: [f32; 3]) -> TriangleMesh {
     let [sx, sy, sz] = size;
-    cuboid([cx - sx / 2.0, cy - sy / 2.0, z0], [cx + sx / 2.0, cy + sy / 2.0, z0 + sz])
+    cuboid(
+        [cx - sx / 2.0, cy - sy / 2.0, z0],
+        [cx + sx / 2.0, cy + sy / 2.0, z0 + sz],
+    )
 }
 
 /// A beam of square cross-section `width` from `from` to `to`.
@@ -77,19 +87,19 @@ pub fn cylinder(base: Point3<f32>, radius: f32, height: f32, segments: u32) -> T
 
 /// A section of a thick vertical cylindrical shell around the z axis: radii `r_inner..r_outer`,
 /// angles `angle_from..angle_to` (radians, counter-clockwise from +x), heights `z_from..z_to`.
-pub fn curved_panel(
-    radii: (f32, f32),
-    angles: (f32, f32),
-    heights: (f32, f32),
-    segments: u32,
-) -> TriangleMesh {
+pub fn curved_panel(radii: (f32, f32), angles: (f32, f32), heights: (f32, f32), segments: u32) -> TriangleMesh {
     let n = segments.max(1);
     let (r_inner, r_outer) = radii;
     let mut vertices = Vec::with_capacity(4 * (n as usize + 1));
     for i in 0..=n {
         let a = angles.0 + (angles.1 - angles.0) * i as f32 / n as f32;
         let (s, c) = a.sin_cos();
-        for (r, z) in [(r_inner, heights.0), (r_inner, heights.1), (r_outer, heights.0), (r_outer, heights.1)] {
+        for (r, z) in [
+            (r_inner, heights.0),
+            (r_inner, heights.1),
+            (r_outer, heights.0),
+            (r_outer, heights.1),
+        ] {
             vertices.push(Point3::new(r * c, r * s, z));
         }
     }
@@ -129,14 +139,24 @@ mod tests {
 
     #[test]
     fn primitives_enclose_their_analytic_volumes_with_outward_winding() {
-        assert_close(signed_volume(&cuboid([0.0, 0.0, 0.0], [1.0, 2.0, 3.0])), 6.0, 1e-5, "cuboid");
+        assert_close(
+            signed_volume(&cuboid([0.0, 0.0, 0.0], [1.0, 2.0, 3.0])),
+            6.0,
+            1e-5,
+            "cuboid",
+        );
         let b = beam(Point3::new(1.0, 1.0, 1.0), Point3::new(1.0, 3.0, 1.0), 0.1);
         assert_close(signed_volume(&b), 0.02, 1e-6, "beam");
         let down = beam(Point3::new(0.0, 0.0, 1.0), Point3::new(0.0, 0.0, 0.0), 0.1);
         assert_close(signed_volume(&down), 0.01, 1e-6, "beam pointing down");
         // A 64-gon prism has area (n/2)·r²·sin(2π/n).
         let prism = 32.0 * (TAU / 64.0).sin();
-        assert_close(signed_volume(&cylinder(Point3::new(2.0, 0.0, 0.0), 1.0, 2.0, 64)), 2.0 * prism, 1e-4, "cylinder");
+        assert_close(
+            signed_volume(&cylinder(Point3::new(2.0, 0.0, 0.0), 1.0, 2.0, 64)),
+            2.0 * prism,
+            1e-4,
+            "cylinder",
+        );
         let cone = frustum(Point3::origin(), 1.0, 0.0, 3.0, 64);
         assert_close(signed_volume(&cone), prism, 1e-4, "cone");
         // Half of a shell with radii 1..2, height 1: π(4 − 1)/2.
@@ -146,7 +166,9 @@ mod tests {
 
     #[test]
     fn block_is_centred_on_its_footprint() {
-        let b = block(1.0, 2.0, 0.5, [0.2, 0.4, 1.0]).bounds().expect("box has vertices");
+        let b = block(1.0, 2.0, 0.5, [0.2, 0.4, 1.0])
+            .bounds()
+            .expect("box has vertices");
         assert_eq!(b.min, Point3::new(0.9, 1.8, 0.5));
         assert_eq!(b.max, Point3::new(1.1, 2.2, 1.5));
     }

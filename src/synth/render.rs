@@ -103,11 +103,16 @@ pub fn render_view(
 /// Colour of a hit seen along `direction`, lit by the unit vector `light` (pointing to the light).
 fn shade(hit: &SurfaceHit, point: &Point3<f32>, direction: &Vector3<f32>, light: &Vector3<f32>) -> [u8; 3] {
     let view = direction.normalize();
-    let n = if hit.normal.dot(&view) > 0.0 { -hit.normal } else { hit.normal };
+    let n = if hit.normal.dot(&view) > 0.0 {
+        -hit.normal
+    } else {
+        hit.normal
+    };
     let lambert = n.dot(light).max(0.0);
     let facing = (-n.dot(&view)).max(0.0);
     let brightness = (0.35 + 0.45 * lambert + 0.2 * facing) * texture(point, &n, hit.label.class);
-    hit.color.map(|c| (f32::from(c) * brightness).round().clamp(0.0, 255.0) as u8)
+    hit.color
+        .map(|c| (f32::from(c) * brightness).round().clamp(0.0, 255.0) as u8)
 }
 
 /// Deterministic brightness factor around 1 at `point` on a surface with normal `n`.
@@ -155,13 +160,29 @@ mod tests {
         // A large square at z = 2 in front of a camera at the origin looking along +z.
         let v = [[-5.0, -5.0, 2.0], [5.0, -5.0, 2.0], [5.0, 5.0, 2.0], [-5.0, 5.0, 2.0]].map(Point3::from);
         let wall = TriangleMesh::new(v.to_vec(), vec![[0, 1, 2], [0, 2, 3]]).with_uniform_color([200, 100, 50]);
-        let label = SurfaceLabel { instance_id: 3, class: replica::CHAIR };
+        let label = SurfaceLabel {
+            instance_id: 3,
+            class: replica::CHAIR,
+        };
         let geometry = SceneGeometry::build([(label, &wall)]);
-        let k = CameraIntrinsics { width: 8, height: 6, fx: 6.0, fy: 6.0, cx: 3.5, cy: 2.5 };
+        let k = CameraIntrinsics {
+            width: 8,
+            height: 6,
+            fx: 6.0,
+            fy: 6.0,
+            cx: 3.5,
+            cy: 2.5,
+        };
         let view = render_view(&geometry, &k, &Isometry3::identity());
-        assert!(view.depth_m.iter().all(|&d| (d - 2.0).abs() < 1e-5), "flat wall has constant camera-z depth");
+        assert!(
+            view.depth_m.iter().all(|&d| (d - 2.0).abs() < 1e-5),
+            "flat wall has constant camera-z depth"
+        );
         assert!(view.instance_ids.iter().all(|&id| id == 3));
-        assert!(view.rgb.iter().all(|c| c[0] > c[1] && c[1] > c[2]), "shading keeps the hue");
+        assert!(
+            view.rgb.iter().all(|c| c[0] > c[1] && c[1] > c[2]),
+            "shading keeps the hue"
+        );
         let frame = view.into_rgbd_frame(FrameIndex(4));
         assert_eq!(frame.validate(), Ok(()));
         assert_eq!(frame.instances.object_at(0), Some(ObjectId(3)));
@@ -170,7 +191,14 @@ mod tests {
     #[test]
     fn missed_pixels_have_no_depth_and_no_instance() {
         let geometry = SceneGeometry::build([]);
-        let k = CameraIntrinsics { width: 4, height: 3, fx: 3.0, fy: 3.0, cx: 1.5, cy: 1.0 };
+        let k = CameraIntrinsics {
+            width: 4,
+            height: 3,
+            fx: 3.0,
+            fy: 3.0,
+            cx: 1.5,
+            cy: 1.0,
+        };
         let frame = render_view(&geometry, &k, &Isometry3::identity()).into_rgbd_frame(FrameIndex(0));
         assert!(frame.depth_m.iter().all(|&d| d == 0.0));
         assert!((0..frame.instances.len()).all(|i| frame.instances.label(i) == InstanceLabel::Background));

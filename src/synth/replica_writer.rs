@@ -68,12 +68,21 @@ pub fn write_replica_layout(scene: &SyntheticScene, dir: &Path, progress: impl F
         .collect();
     write_atomic(&dir.join("traj_w_c.txt"), trajectory.as_bytes())?;
     let k = scene.intrinsics();
-    let intrinsics =
-        IntrinsicsFile { width: k.width, height: k.height, fx: k.fx, fy: k.fy, cx: k.cx, cy: k.cy, depth_scale: DEPTH_SCALE };
+    let intrinsics = IntrinsicsFile {
+        width: k.width,
+        height: k.height,
+        fx: k.fx,
+        fy: k.fy,
+        cx: k.cx,
+        cy: k.cy,
+        depth_scale: DEPTH_SCALE,
+    };
     write_json(&dir.join("intrinsics.json"), &intrinsics)?;
     write_json(&dir.join("scene.json"), &SceneDescription::of(scene))?;
     for object in scene.objects() {
-        object.mesh_in_world.write_ply(&dir.join("gt_meshes").join(format!("obj_{}.ply", object.id)))?;
+        object
+            .mesh_in_world
+            .write_ply(&dir.join("gt_meshes").join(format!("obj_{}.ply", object.id)))?;
     }
     Ok(())
 }
@@ -82,11 +91,33 @@ pub fn write_replica_layout(scene: &SyntheticScene, dir: &Path, progress: impl F
 fn write_frame(dir: &Path, i: usize, frame: &RenderedFrame) -> Result<()> {
     let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
     let rgb: Vec<u8> = frame.rgb.iter().flatten().copied().collect();
-    write_png(&dir.join(format!("rgb/rgb_{i}.png")), w, h, &rgb, ExtendedColorType::Rgb8)?;
-    let depth: Vec<u8> = frame.depth_m.iter().flat_map(|&d| depth_to_mm(d).to_ne_bytes()).collect();
-    write_png(&dir.join(format!("depth/depth_{i}.png")), w, h, &depth, ExtendedColorType::L16)?;
+    write_png(
+        &dir.join(format!("rgb/rgb_{i}.png")),
+        w,
+        h,
+        &rgb,
+        ExtendedColorType::Rgb8,
+    )?;
+    let depth: Vec<u8> = frame
+        .depth_m
+        .iter()
+        .flat_map(|&d| depth_to_mm(d).to_ne_bytes())
+        .collect();
+    write_png(
+        &dir.join(format!("depth/depth_{i}.png")),
+        w,
+        h,
+        &depth,
+        ExtendedColorType::L16,
+    )?;
     let classes: Vec<u8> = frame.classes.iter().map(|c| u8::try_from(c.0).unwrap_or(0)).collect();
-    write_png(&dir.join(format!("semantic_class/semantic_class_{i}.png")), w, h, &classes, ExtendedColorType::L8)?;
+    write_png(
+        &dir.join(format!("semantic_class/semantic_class_{i}.png")),
+        w,
+        h,
+        &classes,
+        ExtendedColorType::L8,
+    )?;
     let instances: Vec<u8> = frame.instance_ids.iter().flat_map(|id| id.to_ne_bytes()).collect();
     let path = dir.join(format!("semantic_instance/semantic_instance_{i}.png"));
     write_png(&path, w, h, &instances, ExtendedColorType::L16)
@@ -95,7 +126,11 @@ fn write_frame(dir: &Path, i: usize, frame: &RenderedFrame) -> Result<()> {
 /// Depth in metres → millimetres; invalid or unrepresentable depths become 0.
 fn depth_to_mm(depth_m: f32) -> u16 {
     let mm = (depth_m * DEPTH_SCALE).round();
-    if mm > 0.0 && mm <= f32::from(u16::MAX) { mm as u16 } else { 0 }
+    if mm > 0.0 && mm <= f32::from(u16::MAX) {
+        mm as u16
+    } else {
+        0
+    }
 }
 
 /// Encodes `bytes` (native-endian samples) as PNG into `path`.

@@ -53,7 +53,10 @@ impl FloorRegion {
 impl Room {
     /// The floor inside the walls.
     pub fn floor(&self) -> FloorRegion {
-        FloorRegion { min: [-self.half_x_m, -self.half_y_m], max: [self.half_x_m, self.half_y_m] }
+        FloorRegion {
+            min: [-self.half_x_m, -self.half_y_m],
+            max: [self.half_x_m, self.half_y_m],
+        }
     }
 
     /// Where furniture centres go: away from the side (−y) the camera walks along, so that
@@ -69,7 +72,10 @@ impl Room {
     pub fn surfaces(&self) -> Vec<(SurfaceLabel, TriangleMesh)> {
         let (x, y, h) = (self.half_x_m, self.half_y_m, self.height_m);
         let p = Point3::new;
-        let floor = quad([p(-x, -y, 0.0), p(x, -y, 0.0), p(x, y, 0.0), p(-x, y, 0.0)], [150, 128, 100]);
+        let floor = quad(
+            [p(-x, -y, 0.0), p(x, -y, 0.0), p(x, y, 0.0), p(-x, y, 0.0)],
+            [150, 128, 100],
+        );
         let walls = [
             [p(-x, -y, 0.0), p(-x, y, 0.0), p(-x, y, h), p(-x, -y, h)], // x = −x, facing +x
             [p(x, y, 0.0), p(x, -y, 0.0), p(x, -y, h), p(x, y, h)],     // x = +x, facing −x
@@ -77,10 +83,16 @@ impl Room {
             [p(-x, y, 0.0), p(x, y, 0.0), p(x, y, h), p(-x, y, h)],     // y = +y, facing −y
         ];
         let tints: [[u8; 3]; 4] = [[210, 204, 190], [200, 206, 196], [214, 208, 200], [196, 200, 208]];
-        let floor_label = SurfaceLabel { instance_id: FLOOR_INSTANCE_ID, class: replica::FLOOR };
+        let floor_label = SurfaceLabel {
+            instance_id: FLOOR_INSTANCE_ID,
+            class: replica::FLOOR,
+        };
         let mut out = vec![(floor_label, floor)];
         for (k, (corners, tint)) in walls.into_iter().zip(tints).enumerate() {
-            let label = SurfaceLabel { instance_id: FIRST_WALL_INSTANCE_ID + k as u16, class: replica::WALL };
+            let label = SurfaceLabel {
+                instance_id: FIRST_WALL_INSTANCE_ID + k as u16,
+                class: replica::WALL,
+            };
             out.push((label, quad(corners, tint)));
         }
         out
@@ -99,7 +111,11 @@ mod tests {
 
     #[test]
     fn room_surfaces_face_inwards_and_are_background() {
-        let room = Room { half_x_m: 2.0, half_y_m: 1.5, height_m: 2.5 };
+        let room = Room {
+            half_x_m: 2.0,
+            half_y_m: 1.5,
+            height_m: 2.5,
+        };
         let surfaces = room.surfaces();
         assert_eq!(surfaces.len(), 5, "floor and four walls");
         for (label, mesh) in &surfaces {
@@ -107,13 +123,21 @@ mod tests {
             let [a, b, c] = mesh.corners(0);
             let normal = (b - a).cross(&(c - a));
             let to_centre = Point3::new(0.0, 0.0, 1.0) - a;
-            assert!(normal.dot(&to_centre) > 0.0, "surface {} faces the room", label.instance_id);
+            assert!(
+                normal.dot(&to_centre) > 0.0,
+                "surface {} faces the room",
+                label.instance_id
+            );
         }
     }
 
     #[test]
     fn furniture_region_lies_inside_the_floor() {
-        let room = Room { half_x_m: 3.5, half_y_m: 3.0, height_m: 2.7 };
+        let room = Room {
+            half_x_m: 3.5,
+            half_y_m: 3.0,
+            height_m: 2.7,
+        };
         let r = room.furniture_region();
         assert!(room.floor().contains(r.min[0], r.min[1], 0.3) && room.floor().contains(r.max[0], r.max[1], 0.3));
     }

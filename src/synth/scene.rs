@@ -53,7 +53,10 @@ impl SceneObject {
 
     fn label(&self) -> SurfaceLabel {
         let instance_id = u16::try_from(self.id.0).expect("scenes hold fewer than 100 objects");
-        SurfaceLabel { instance_id, class: self.class() }
+        SurfaceLabel {
+            instance_id,
+            class: self.class(),
+        }
     }
 }
 
@@ -85,7 +88,12 @@ impl SyntheticScene {
             .map(|(p, id)| {
                 let mesh = design_meshes.entry(p.design).or_insert_with(|| p.design.mesh());
                 let mesh_in_world = mesh.transformed(&p.world_from_object);
-                SceneObject { id: ObjectId(id), design: p.design, world_from_object: p.world_from_object, mesh_in_world }
+                SceneObject {
+                    id: ObjectId(id),
+                    design: p.design,
+                    world_from_object: p.world_from_object,
+                    mesh_in_world,
+                }
             })
             .collect();
         let background = room.surfaces();
@@ -103,8 +111,6 @@ impl SyntheticScene {
         })
     }
 
-    /// scratch
-    pub fn geometry(&self) -> &SceneGeometry { &self.geometry }
     /// The seed the scene was generated from.
     pub fn seed(&self) -> u64 {
         self.seed
@@ -138,7 +144,10 @@ impl SyntheticScene {
     /// Renders frame `position` with its raw instance-id and class images.
     pub fn render(&self, position: usize) -> Result<RenderedFrame> {
         let pose = self.trajectory.get(position).ok_or_else(|| {
-            CatmapError::layout(self.name(), format!("frame {position} out of range ({} frames)", self.trajectory.len()))
+            CatmapError::layout(
+                self.name(),
+                format!("frame {position} out of range ({} frames)", self.trajectory.len()),
+            )
         })?;
         Ok(render_view(&self.geometry, &self.intrinsics, pose))
     }
@@ -157,7 +166,9 @@ impl SyntheticScene {
             .iter()
             .map(|o| {
                 let mut rng = seeded_rng(self.seed, RngStream::Object(o.id));
-                o.mesh_in_world.sample_surface(OBSERVATION_SAMPLES, &mut rng).unwrap_or_default()
+                o.mesh_in_world
+                    .sample_surface(OBSERVATION_SAMPLES, &mut rng)
+                    .unwrap_or_default()
             })
             .collect();
         let flat: Vec<Point3<f32>> = samples.iter().flatten().copied().collect();
@@ -165,7 +176,10 @@ impl SyntheticScene {
             .trajectory
             .par_iter()
             .map(|pose| flat.iter().map(|p| self.sees(pose, p)).collect::<Vec<bool>>())
-            .reduce(|| vec![false; flat.len()], |a, b| a.iter().zip(&b).map(|(x, y)| *x || *y).collect());
+            .reduce(
+                || vec![false; flat.len()],
+                |a, b| a.iter().zip(&b).map(|(x, y)| *x || *y).collect(),
+            );
         let mut offset = 0;
         self.objects
             .iter()
@@ -173,7 +187,14 @@ impl SyntheticScene {
             .map(|(o, s)| {
                 let hits = seen[offset..offset + s.len()].iter().filter(|&&v| v).count();
                 offset += s.len();
-                (o.id, if s.is_empty() { 0.0 } else { hits as f32 / s.len() as f32 })
+                (
+                    o.id,
+                    if s.is_empty() {
+                        0.0
+                    } else {
+                        hits as f32 / s.len() as f32
+                    },
+                )
             })
             .collect()
     }
@@ -192,7 +213,9 @@ impl SyntheticScene {
         let direction = world_from_camera.rotation * (p.coords / p.z);
         let origin = Point3::from(world_from_camera.translation.vector);
         let t_max = p.z + OBSERVATION_TOLERANCE_M;
-        self.geometry.cast(origin, direction, t_max).is_none_or(|hit| hit.t >= p.z - OBSERVATION_TOLERANCE_M)
+        self.geometry
+            .cast(origin, direction, t_max)
+            .is_none_or(|hit| hit.t >= p.z - OBSERVATION_TOLERANCE_M)
     }
 }
 
@@ -225,7 +248,10 @@ mod tests {
         assert_eq!(scene.objects().len(), 6);
         let frame = scene.read_frame(15).expect("frame in range");
         assert_eq!(frame.validate(), Ok(()));
-        assert!((0..frame.instances.len()).any(|i| frame.instances.object_at(i).is_some()), "objects in view");
+        assert!(
+            (0..frame.instances.len()).any(|i| frame.instances.object_at(i).is_some()),
+            "objects in view"
+        );
         assert!(scene.read_frame(30).is_err(), "out-of-range frame is an error");
     }
 

@@ -31,7 +31,11 @@ pub fn camera_trajectory(room: &Room, frame_count: usize) -> Vec<Isometry3<f32>>
     let span_x = room.half_x_m - 0.7;
     (0..frame_count)
         .map(|i| {
-            let s = if frame_count > 1 { i as f32 / (frame_count - 1) as f32 } else { 0.5 };
+            let s = if frame_count > 1 {
+                i as f32 / (frame_count - 1) as f32
+            } else {
+                0.5
+            };
             let x = span_x * (2.0 * s - 1.0);
             let y = -room.half_y_m + 0.45 + 0.1 * (PI * s).sin();
             let z = EYE_HEIGHT_M + 0.04 * (TAU * 2.0 * s).sin();
@@ -51,23 +55,42 @@ mod tests {
     #[test]
     fn look_rotation_follows_the_opencv_convention() {
         let r = look_rotation(0.0, 0.0);
-        assert!((r * Vector3::z() - Vector3::y()).norm() < 1e-6, "camera z looks along world +y");
-        assert!((r * Vector3::x() - Vector3::x()).norm() < 1e-6, "camera x is world +x (right)");
+        assert!(
+            (r * Vector3::z() - Vector3::y()).norm() < 1e-6,
+            "camera z looks along world +y"
+        );
+        assert!(
+            (r * Vector3::x() - Vector3::x()).norm() < 1e-6,
+            "camera x is world +x (right)"
+        );
         assert!((r * Vector3::y() + Vector3::z()).norm() < 1e-6, "camera y points down");
         let tilted = look_rotation(0.3, -0.4) * Vector3::z();
-        assert!(tilted.z < 0.0 && tilted.x > 0.0, "negative pitch looks down, positive yaw toward +x");
+        assert!(
+            tilted.z < 0.0 && tilted.x > 0.0,
+            "negative pitch looks down, positive yaw toward +x"
+        );
     }
 
     #[test]
     fn cameras_stay_inside_the_room_at_eye_height_and_look_inwards() {
-        let room = Room { half_x_m: 2.5, half_y_m: 2.25, height_m: 2.6 };
+        let room = Room {
+            half_x_m: 2.5,
+            half_y_m: 2.25,
+            height_m: 2.6,
+        };
         let poses = camera_trajectory(&room, 30);
         assert_eq!(poses.len(), 30);
         for pose in &poses {
             let c = Point3::from(pose.translation.vector);
-            assert!(room.floor().contains(c.x, c.y, 0.3) && (c.z - 1.4).abs() < 0.05, "camera at {c}");
+            assert!(
+                room.floor().contains(c.x, c.y, 0.3) && (c.z - 1.4).abs() < 0.05,
+                "camera at {c}"
+            );
             let forward = pose.rotation * Vector3::z();
-            assert!(forward.y > 0.5 && forward.z < 0.0, "looks into the room and down: {forward}");
+            assert!(
+                forward.y > 0.5 && forward.z < 0.0,
+                "looks into the room and down: {forward}"
+            );
         }
     }
 }

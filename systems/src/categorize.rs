@@ -25,11 +25,19 @@ pub fn update_categories(
     for (class, entity) in &index.0 {
         if let Ok(mut category) = categories.get_mut(*entity) {
             let list = members.remove(class).unwrap_or_default();
-            category.set_if_neq(Category { class: *class, members: sorted(list) });
+            category.set_if_neq(Category {
+                class: *class,
+                members: sorted(list),
+            });
         }
     }
     for (class, list) in members {
-        let entity = commands.spawn(Category { class, members: sorted(list) }).id();
+        let entity = commands
+            .spawn(Category {
+                class,
+                members: sorted(list),
+            })
+            .id();
         tracing::debug!(class = %class, "new category");
         index.0.insert(class, entity);
     }

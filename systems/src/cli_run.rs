@@ -18,7 +18,7 @@ use crate::cli_synth::write_scene;
 use crate::progress::bar;
 
 /// Arguments of `catmap run`.
-#[derive(clap::Args, Debug, Default)]
+#[derive(clap::Args, Debug)]
 pub struct RunArgs {
     /// Dataset folder; without it the default synthetic scene is written to OUT/scene and mapped.
     #[arg(long)]
@@ -53,10 +53,9 @@ pub struct RunArgs {
 }
 
 /// Dataset layouts.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DatasetFormat {
     /// Replica in vMAP's layout (also what `catmap synth` writes).
-    #[default]
     Replica,
     /// ScanNet (SensReader output + 2D labels).
     Scannet,
@@ -93,8 +92,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     progress.finish_and_clear();
     stream.join();
 
-    let mut stage_seconds: std::collections::BTreeMap<String, f64> =
-        mapper.stage_seconds().into_iter().map(|(k, v)| (k.to_owned(), v)).collect();
+    let mut stage_seconds: std::collections::BTreeMap<String, f64> = mapper
+        .stage_seconds()
+        .into_iter()
+        .map(|(k, v)| (k.to_owned(), v))
+        .collect();
     if let Some(stats) = mapper.stream_stats() {
         stage_seconds.insert("read (reader thread)".to_owned(), stats.decode_time.as_secs_f64());
     }
@@ -108,7 +110,12 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
 }
 
 fn open_dataset(args: &RunArgs, config: &catmap::MapperConfig) -> anyhow::Result<Arc<dyn FrameSource>> {
-    let camera = args.camera.as_deref().map(parse_camera_spec).transpose().context("--camera")?;
+    let camera = args
+        .camera
+        .as_deref()
+        .map(parse_camera_spec)
+        .transpose()
+        .context("--camera")?;
     let dir = match &args.dataset {
         Some(dir) => dir.clone(),
         None => {
@@ -119,7 +126,10 @@ fn open_dataset(args: &RunArgs, config: &catmap::MapperConfig) -> anyhow::Result
     };
     let source: Arc<dyn FrameSource> = match args.format {
         DatasetFormat::Replica => {
-            let options = ReplicaOptions { camera, ..ReplicaOptions::from_config(&config.dataset) };
+            let options = ReplicaOptions {
+                camera,
+                ..ReplicaOptions::from_config(&config.dataset)
+            };
             Arc::new(ReplicaSequence::open(&dir, &options)?)
         }
         DatasetFormat::Scannet => {
@@ -138,16 +148,23 @@ fn open_dataset(args: &RunArgs, config: &catmap::MapperConfig) -> anyhow::Result
 fn open_recording(args: &RunArgs) -> anyhow::Result<rerun::RecordingStream> {
     let builder = rerun::RecordingStreamBuilder::new("catmap");
     if let Some(url) = &args.rerun_connect {
-        let rec = builder.connect_grpc_opts(url.clone()).with_context(|| format!("cannot connect to Rerun at {url}"))?;
+        let rec = builder
+            .connect_grpc_opts(url.clone())
+            .with_context(|| format!("cannot connect to Rerun at {url}"))?;
         if let Some(path) = &args.rerun_save {
             tracing::warn!(path = %path.display(), "--rerun-save is ignored with --rerun-connect");
         }
         return Ok(rec);
     }
-    let path = args.rerun_save.clone().unwrap_or_else(|| args.out.join("recording.rrd"));
+    let path = args
+        .rerun_save
+        .clone()
+        .unwrap_or_else(|| args.out.join("recording.rrd"));
     save_recording(builder, &path)
 }
 
 fn save_recording(builder: rerun::RecordingStreamBuilder, path: &Path) -> anyhow::Result<rerun::RecordingStream> {
-    builder.save(path).with_context(|| format!("cannot write the Rerun recording {}", path.display()))
+    builder
+        .save(path)
+        .with_context(|| format!("cannot write the Rerun recording {}", path.display()))
 }

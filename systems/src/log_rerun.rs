@@ -47,7 +47,10 @@ pub struct Rerun(pub rerun::RecordingStream);
 
 /// Logs the static view coordinates once.
 pub fn log_world_setup(rerun: &rerun::RecordingStream) {
-    warn_on_error(rerun.log_static(paths::WORLD, &rerun::ViewCoordinates::RIGHT_HAND_Z_UP()), paths::WORLD);
+    warn_on_error(
+        rerun.log_static(paths::WORLD, &rerun::ViewCoordinates::RIGHT_HAND_Z_UP()),
+        paths::WORLD,
+    );
 }
 
 /// Logs each new frame's pose, pinhole and (every `image_every` frames) its images.
@@ -67,8 +70,13 @@ fn log_camera_pose(rec: &rerun::RecordingStream, frame: &RgbdFrame) {
     let t = frame.world_from_camera.translation.vector;
     let r = frame.world_from_camera.rotation.to_rotation_matrix();
     let m = r.matrix();
-    let columns = [[m[(0, 0)], m[(1, 0)], m[(2, 0)]], [m[(0, 1)], m[(1, 1)], m[(2, 1)]], [m[(0, 2)], m[(1, 2)], m[(2, 2)]]];
-    let transform = rerun::Transform3D::from_translation_mat3x3([t.x, t.y, t.z], rerun::datatypes::Mat3x3::from(columns));
+    let columns = [
+        [m[(0, 0)], m[(1, 0)], m[(2, 0)]],
+        [m[(0, 1)], m[(1, 1)], m[(2, 1)]],
+        [m[(0, 2)], m[(1, 2)], m[(2, 2)]],
+    ];
+    let transform =
+        rerun::Transform3D::from_translation_mat3x3([t.x, t.y, t.z], rerun::datatypes::Mat3x3::from(columns));
     warn_on_error(rec.log(paths::CAMERA, &transform), paths::CAMERA);
 }
 
@@ -85,13 +93,20 @@ fn log_images(rec: &rerun::RecordingStream, frame: &RgbdFrame, downscale: u32, j
         .write_image(&rgb, w, h, image::ExtendedColorType::Rgb8);
     match encoded {
         Ok(()) => warn_on_error(
-            rec.log(paths::RGB, &rerun::EncodedImage::from_file_contents(jpeg).with_media_type(rerun::MediaType::JPEG)),
+            rec.log(
+                paths::RGB,
+                &rerun::EncodedImage::from_file_contents(jpeg).with_media_type(rerun::MediaType::JPEG),
+            ),
             paths::RGB,
         ),
         Err(e) => tracing::warn!(error = %e, "cannot encode the colour image for Rerun"),
     }
 
-    let depth_mm: Vec<u16> = frame.depth_m.iter().map(|d| (d * 1000.0).round().clamp(0.0, 65535.0) as u16).collect();
+    let depth_mm: Vec<u16> = frame
+        .depth_m
+        .iter()
+        .map(|d| (d * 1000.0).round().clamp(0.0, 65535.0) as u16)
+        .collect();
     let (depth_mm, _, _) = downscale_nearest(&depth_mm, k.width, k.height, downscale);
     let depth = rerun::DepthImage::from_gray16(to_le_bytes(&depth_mm), [w, h]).with_meter(1000.0);
     warn_on_error(rec.log(paths::DEPTH, &depth), paths::DEPTH);
@@ -157,7 +172,9 @@ pub fn log_object_clouds(
         let step = points.len().div_ceil(cfg.max_points_per_object.max(1)).max(1);
         let positions: Vec<[f32; 3]> = points.iter().step_by(step).map(|p| [p.x, p.y, p.z]).collect();
         let [r, g, b] = class_color(class.0);
-        let archetype = rerun::Points3D::new(positions).with_colors([rerun::Color::from_rgb(r, g, b)]).with_radii([0.004]);
+        let archetype = rerun::Points3D::new(positions)
+            .with_colors([rerun::Color::from_rgb(r, g, b)])
+            .with_radii([0.004]);
         let path = format!("{}/points", paths::object(object.id));
         warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
         logged_sizes.insert(object.id, size);
@@ -165,16 +182,22 @@ pub fn log_object_clouds(
 }
 
 /// Logs the oriented box of every object whose box was refitted this tick.
-pub fn log_object_boxes(rerun: Res<Rerun>, objects: Query<(&Object, &ObjectClass, &ObjectBounds), Changed<ObjectBounds>>) {
+pub fn log_object_boxes(
+    rerun: Res<Rerun>,
+    objects: Query<(&Object, &ObjectClass, &ObjectBounds), Changed<ObjectBounds>>,
+) {
     for (object, class, bounds) in &objects {
         let b = &bounds.oriented_box;
         let c = b.center();
         let q = b.world_from_box.rotation;
         let [r, g, bl] = class_color(class.0);
-        let archetype = rerun::Boxes3D::from_centers_and_half_sizes([[c.x, c.y, c.z]], [[b.half_extents.x, b.half_extents.y, b.half_extents.z]])
-            .with_quaternions([rerun::Quaternion::from_xyzw([q.i, q.j, q.k, q.w])])
-            .with_colors([rerun::Color::from_rgb(r, g, bl)])
-            .with_labels([object_label(object.id, class.0)]);
+        let archetype = rerun::Boxes3D::from_centers_and_half_sizes(
+            [[c.x, c.y, c.z]],
+            [[b.half_extents.x, b.half_extents.y, b.half_extents.z]],
+        )
+        .with_quaternions([rerun::Quaternion::from_xyzw([q.i, q.j, q.k, q.w])])
+        .with_colors([rerun::Color::from_rgb(r, g, bl)])
+        .with_labels([object_label(object.id, class.0)]);
         let path = format!("{}/box", paths::object(object.id));
         warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
     }
@@ -191,8 +214,18 @@ fn object_label(id: ObjectId, class: ClassId) -> String {
 /// A fixed, distinct colour per class.
 pub fn class_color(class: ClassId) -> [u8; 3] {
     const PALETTE: [[u8; 3]; 12] = [
-        [230, 25, 75], [60, 180, 75], [255, 225, 25], [0, 130, 200], [245, 130, 48], [145, 30, 180],
-        [70, 240, 240], [240, 50, 230], [210, 245, 60], [250, 190, 212], [0, 128, 128], [170, 110, 40],
+        [230, 25, 75],
+        [60, 180, 75],
+        [255, 225, 25],
+        [0, 130, 200],
+        [245, 130, 48],
+        [145, 30, 180],
+        [70, 240, 240],
+        [240, 50, 230],
+        [210, 245, 60],
+        [250, 190, 212],
+        [0, 128, 128],
+        [170, 110, 40],
     ];
     PALETTE[(class.0.wrapping_mul(2_654_435_761) >> 7) as usize % PALETTE.len()]
 }

@@ -28,12 +28,26 @@ enum Command {
     Config,
 }
 
+/// `catmap` with no subcommand runs `catmap run` with its defaults.
+#[derive(Parser, Debug)]
+struct RunDefaults {
+    #[command(flatten)]
+    args: cli_run::RunArgs,
+}
+
 fn main() -> anyhow::Result<()> {
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
-    tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_target(false).init();
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .init();
     let cli = Cli::parse();
-    match cli.command.unwrap_or_else(|| Command::Run(cli_run::RunArgs::default())) {
+    match cli
+        .command
+        .unwrap_or_else(|| Command::Run(RunDefaults::parse_from(["catmap"]).args))
+    {
         Command::Run(args) => cli_run::run(&args),
         Command::Synth(args) => cli_synth::synth(&args),
         Command::Config => {
@@ -54,7 +68,8 @@ fn load_config(path: Option<&PathBuf>) -> anyhow::Result<catmap::MapperConfig> {
     match path {
         None => Ok(catmap::MapperConfig::default()),
         Some(path) => {
-            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read config {}", path.display()))?;
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("cannot read config {}", path.display()))?;
             catmap::MapperConfig::from_toml(&text).with_context(|| format!("in config {}", path.display()))
         }
     }

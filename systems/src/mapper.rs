@@ -70,7 +70,11 @@ impl Mapper {
         world.init_resource::<ObjectIndex>();
         world.init_resource::<CategoryIndex>();
         world.init_resource::<StageTimes>();
-        Ok(Self { world, schedule: build_schedule(), pusher: None })
+        Ok(Self {
+            world,
+            schedule: build_schedule(),
+            pusher: None,
+        })
     }
 
     /// Logs to `recording` from now on (the `Log` stage only runs with a recording).
@@ -82,7 +86,10 @@ impl Mapper {
     /// Queues one frame. When the inbox is full the mapper steps until there is room, so no
     /// frame is ever dropped.
     pub fn push(&mut self, frame: RgbdFrame) -> Result<(), MapperError> {
-        frame.validate().map_err(|reason| MapperError::BadFrame { index: frame.index.0, reason })?;
+        frame.validate().map_err(|reason| MapperError::BadFrame {
+            index: frame.index.0,
+            reason,
+        })?;
         let mut message = StreamMessage::Frame(std::sync::Arc::new(frame));
         loop {
             let sender = self.pusher.as_ref().ok_or(MapperError::NotAccepting("no push inbox"))?;
@@ -169,7 +176,12 @@ impl Mapper {
 
     /// Seconds spent per stage so far.
     pub fn stage_seconds(&self) -> BTreeMap<&'static str, f64> {
-        self.world.resource::<StageTimes>().0.iter().map(|(k, v)| (*k, v.as_secs_f64())).collect()
+        self.world
+            .resource::<StageTimes>()
+            .0
+            .iter()
+            .map(|(k, v)| (*k, v.as_secs_f64()))
+            .collect()
     }
 
     /// The ECS world, for inspection in tests and tools.

@@ -44,7 +44,11 @@ pub struct StageTimes(pub BTreeMap<&'static str, Duration>);
 impl StageTimes {
     /// Starts timing `stage`; the time is added when the returned guard drops.
     pub fn start(&mut self, stage: &'static str) -> StageTimer<'_> {
-        StageTimer { times: self, stage, started: Instant::now() }
+        StageTimer {
+            times: self,
+            stage,
+            started: Instant::now(),
+        }
     }
 }
 

@@ -35,7 +35,10 @@ pub enum MapperSystems {
 pub fn build_schedule() -> Schedule {
     let mut schedule = Schedule::default();
     schedule.set_executor(SingleThreadedExecutor::new());
-    schedule.set_build_settings(ScheduleBuildSettings { ambiguity_detection: LogLevel::Error, ..Default::default() });
+    schedule.set_build_settings(ScheduleBuildSettings {
+        ambiguity_detection: LogLevel::Error,
+        ..Default::default()
+    });
     schedule.configure_sets(
         (
             MapperSystems::Ingest,
@@ -52,10 +55,21 @@ pub fn build_schedule() -> Schedule {
     schedule.add_systems((
         ingest_frames.in_set(MapperSystems::Ingest),
         observe_frames.in_set(MapperSystems::Segment),
-        (spawn_new_objects, record_object_views, record_background_views).chain().in_set(MapperSystems::Track),
-        (accumulate_clouds, refresh_object_bounds).chain().in_set(MapperSystems::Map),
+        (spawn_new_objects, record_object_views, record_background_views)
+            .chain()
+            .in_set(MapperSystems::Track),
+        (accumulate_clouds, refresh_object_bounds)
+            .chain()
+            .in_set(MapperSystems::Map),
         update_categories.in_set(MapperSystems::Categorize),
-        (log_camera_frames, log_instance_legend, log_object_clouds, log_object_boxes).chain().in_set(MapperSystems::Log),
+        (
+            log_camera_frames,
+            log_instance_legend,
+            log_object_clouds,
+            log_object_boxes,
+        )
+            .chain()
+            .in_set(MapperSystems::Log),
         despawn_consumed_frames.in_set(MapperSystems::Cleanup),
     ));
     schedule

@@ -88,17 +88,19 @@ impl MapSnapshot {
                 Option<&ObjectBounds>,
             )>()
             .iter(world)
-            .map(|(object, class, votes, visible, keyframes, latest, cloud, bounds)| ObjectSnapshot {
-                id: object.id,
-                class: class.0,
-                class_votes: votes.0.iter().map(|(&c, &n)| (c, n)).collect(),
-                visible_frames: visible.0,
-                keyframes: keyframes.0.frames(),
-                latest_box: *latest,
-                cloud_points: cloud.0.len(),
-                points: cloud.0.points(),
-                bounds: bounds.map(|b| b.oriented_box),
-            })
+            .map(
+                |(object, class, votes, visible, keyframes, latest, cloud, bounds)| ObjectSnapshot {
+                    id: object.id,
+                    class: class.0,
+                    class_votes: votes.0.iter().map(|(&c, &n)| (c, n)).collect(),
+                    visible_frames: visible.0,
+                    keyframes: keyframes.0.frames(),
+                    latest_box: *latest,
+                    cloud_points: cloud.0.len(),
+                    points: cloud.0.points(),
+                    bounds: bounds.map(|b| b.oriented_box),
+                },
+            )
             .collect();
         objects.sort_by_key(|o| o.id);
         let background = world
@@ -113,7 +115,10 @@ impl MapSnapshot {
         let mut categories: Vec<CategorySnapshot> = world
             .query::<&Category>()
             .iter(world)
-            .map(|c| CategorySnapshot { class: c.class, members: c.members.clone() })
+            .map(|c| CategorySnapshot {
+                class: c.class,
+                members: c.members.clone(),
+            })
             .collect();
         categories.sort_by_key(|c| c.class);
         Self {

@@ -92,7 +92,11 @@ impl RunSummary {
     /// The end-of-run table for the terminal.
     pub fn table(&self) -> String {
         let mut out = String::new();
-        let _ = writeln!(out, "{} frames ({} skipped) from {}", self.frames, self.frames_skipped, self.dataset);
+        let _ = writeln!(
+            out,
+            "{} frames ({} skipped) from {}",
+            self.frames, self.frames_skipped, self.dataset
+        );
         let _ = writeln!(out, "\n| class | objects |\n|---|---:|");
         for (class, n) in &self.objects_per_class {
             let _ = writeln!(out, "| {class} | {n} |");
@@ -102,7 +106,11 @@ impl RunSummary {
         for (stage, secs) in &self.stage_seconds {
             let _ = writeln!(out, "| {stage} | {secs:.2} |");
         }
-        let _ = writeln!(out, "| **wall clock** | {:.2} ({:.1} frames/s) |", self.total_seconds, self.frames_per_second);
+        let _ = writeln!(
+            out,
+            "| **wall clock** | {:.2} ({:.1} frames/s) |",
+            self.total_seconds, self.frames_per_second
+        );
         out
     }
 }

@@ -9,8 +9,8 @@ use catmap::pixel_box::PixelBox;
 use catmap::rng::{RngStream, seeded_rng};
 
 use crate::components::{
-    Background, CameraFrame, ClassVotes, FrameObservations, Keyframes, LatestBox, Object, ObjectClass,
-    ObjectCloud, ObjectRng, VisibleFrames,
+    Background, CameraFrame, ClassVotes, FrameObservations, Keyframes, LatestBox, Object, ObjectClass, ObjectCloud,
+    ObjectRng, VisibleFrames,
 };
 use crate::resources::{ObjectIndex, Settings, StageTimes};
 
@@ -27,14 +27,24 @@ pub fn spawn_new_objects(
             if index.0.contains_key(&id) {
                 continue;
             }
-            let class = majority_class(&observation.class_votes.iter().map(|(&c, &n)| (c, u64::from(n))).collect())
-                .expect("an observed object has at least one pixel");
+            let class = majority_class(
+                &observation
+                    .class_votes
+                    .iter()
+                    .map(|(&c, &n)| (c, u64::from(n)))
+                    .collect(),
+            )
+            .expect("an observed object has at least one pixel");
             let entity = commands
                 .spawn((
                     Object { id },
                     ObjectClass(class),
                     ClassVotes::default(),
-                    LatestBox { frame: frame.0.index, tight: observation.tight_box, sample: observation.sample_box },
+                    LatestBox {
+                        frame: frame.0.index,
+                        tight: observation.tight_box,
+                        sample: observation.sample_box,
+                    },
                     Keyframes::default(),
                     VisibleFrames::default(),
                     ObjectCloud(ObservedCloud::new(config.objects.cloud_voxel_m)),
@@ -78,12 +88,25 @@ pub fn record_object_views(
             if let Some(majority) = majority_class(&votes.0) {
                 class.set_if_neq(ObjectClass(majority));
             }
-            *latest = LatestBox { frame: frame.0.index, tight: observation.tight_box, sample: observation.sample_box };
+            *latest = LatestBox {
+                frame: frame.0.index,
+                tight: observation.tight_box,
+                sample: observation.sample_box,
+            };
             visible.0 += 1;
             let view = ObjectView::crop(&frame.0, observation.sample_box, ViewOwner::Object(*id));
-            let admission =
-                keyframes.0.offer(frame.0.index, view, KeyframeRole::Object, &settings.0.keyframes, &mut rng.0);
-            if let Admission::Overwrote { replaced, keyframe: true } = admission {
+            let admission = keyframes.0.offer(
+                frame.0.index,
+                view,
+                KeyframeRole::Object,
+                &settings.0.keyframes,
+                &mut rng.0,
+            );
+            if let Admission::Overwrote {
+                replaced,
+                keyframe: true,
+            } = admission
+            {
                 tracing::trace!(object = %id, ?replaced, "keyframe window full, slot replaced");
             }
         }
@@ -101,9 +124,20 @@ pub fn record_background_views(
     };
     for frame in &frames {
         let k = frame.0.intrinsics;
-        let whole_image = PixelBox { u_min: 0, v_min: 0, u_max: k.width - 1, v_max: k.height - 1 };
+        let whole_image = PixelBox {
+            u_min: 0,
+            v_min: 0,
+            u_max: k.width - 1,
+            v_max: k.height - 1,
+        };
         let view = ObjectView::crop(&frame.0, whole_image, ViewOwner::Background);
-        keyframes.0.offer(frame.0.index, view, KeyframeRole::Background, &settings.0.keyframes, &mut rng.0);
+        keyframes.0.offer(
+            frame.0.index,
+            view,
+            KeyframeRole::Background,
+            &settings.0.keyframes,
+            &mut rng.0,
+        );
         visible.0 += 1;
     }
 }
