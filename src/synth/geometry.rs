@@ -1,4 +1,4 @@
-//! Everything a ray can hit in a synthetic scene: one BVH over all labelled meshes, plus each
+//! Everything a ray can hit in a synthetic scene: BVHs over the labelled meshes, plus each
 //! triangle's label, colour and unit normal.
 
 use nalgebra::{Point3, Vector3};
@@ -31,16 +31,15 @@ pub struct SurfaceHit {
     pub label: SurfaceLabel,
 }
 
-/// Labelled scene triangles behind a BVH.
+/// Labelled triangles behind one BVH.
 #[derive(Debug, Clone)]
-pub struct SceneGeometry {
+struct Layer {
     bvh: Bvh,
     attributes: Vec<TriangleAttributes>,
 }
 
-impl SceneGeometry {
-    /// Builds the geometry from labelled meshes (world coordinates).
-    pub fn build<'a>(surfaces: impl IntoIterator<Item = (SurfaceLabel, &'a TriangleMesh)>) -> Self {
+impl Layer {
+    fn build<'a>(surfaces: impl IntoIterator<Item = (SurfaceLabel, &'a TriangleMesh)>) -> Self {
         let mut corners = Vec::new();
         let mut attributes = Vec::new();
         for (label, mesh) in surfaces {
@@ -64,14 +63,8 @@ impl SceneGeometry {
         }
     }
 
-    /// Number of triangles.
-    pub fn triangle_count(&self) -> usize {
-        self.attributes.len()
-    }
-
-    /// The nearest surface hit by `origin + t·direction` with `t < t_max`.
-    pub fn cast(&self, origin: Point3<f32>, direction: Vector3<f32>, t_max: f32) -> Option<SurfaceHit> {
-        let hit = self.bvh.nearest_hit(&Ray { origin, direction }, t_max)?;
+    fn cast(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
+        let hit = self.bvh.nearest_hit(ray, t_max)?;
         let a = &self.attributes[hit.triangle as usize];
         Some(SurfaceHit {
             t: hit.t,
@@ -79,6 +72,42 @@ impl SceneGeometry {
             color: a.color,
             label: a.label,
         })
+    }
+}
+
+/// The scene's labelled triangles in two layers: the few large background surfaces (room), cast
+/// first, and the many small object triangles, cast only up to the background hit. The object
+/// BVH's root then bounds the furniture alone, so rays aimed above it finish after one box test.
+#[derive(Debug, Clone)]
+pub struct SceneGeometry {
+    background: Layer,
+    objects: Layer,
+}
+
+impl SceneGeometry {
+    /// Builds the geometry from labelled background and object meshes (world coordinates).
+    pub fn build<'a, 'b>(
+        background: impl IntoIterator<Item = (SurfaceLabel, &'a TriangleMesh)>,
+        objects: impl IntoIterator<Item = (SurfaceLabel, &'b TriangleMesh)>,
+    ) -> Self {
+        Self {
+            background: Layer::build(background),
+            objects: Layer::build(objects),
+        }
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.background.attributes.len() + self.objects.attributes.len()
+    }
+
+    /// The nearest surface hit by `origin + t·direction` with `t < t_max`.
+    pub fn cast(&self, origin: Point3<f32>, direction: Vector3<f32>, t_max: f32) -> Option<SurfaceHit> {
+        let ray = Ray { origin, direction };
+        let background = self.background.cast(&ray, t_max);
+        self.objects
+            .cast(&ray, background.map_or(t_max, |hit| hit.t))
+            .or(background)
     }
 }
 
@@ -105,7 +134,7 @@ mod tests {
                 class: ClassId(80),
             },
         );
-        let geometry = SceneGeometry::build([(far_label, &far), (near_label, &near)]);
+        let geometry = SceneGeometry::build([(far_label, &far)], [(near_label, &near)]);
         assert_eq!(geometry.triangle_count(), 4);
         let hit = geometry
             .cast(Point3::origin(), Vector3::new(0.1, 0.2, 1.0), f32::INFINITY)

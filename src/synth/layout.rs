@@ -286,4 +286,18 @@ mod tests {
         });
         assert!(under_table.count() >= 1, "some chair is pushed under the table");
     }
+
+    #[test]
+    fn both_presets_lay_out_for_many_seeds() {
+        for preset in super::super::preset::Preset::ALL {
+            for seed in 0..40 {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                let furnishing = preset.furnishing([rng.random(), rng.random()]);
+                assert!(
+                    place_furniture(&furnishing, &preset.room(), &mut rng).is_ok(),
+                    "{preset} seed {seed}"
+                );
+            }
+        }
+    }
 }

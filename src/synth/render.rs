@@ -164,7 +164,7 @@ mod tests {
             instance_id: 3,
             class: replica::CHAIR,
         };
-        let geometry = SceneGeometry::build([(label, &wall)]);
+        let geometry = SceneGeometry::build([], [(label, &wall)]);
         let k = CameraIntrinsics {
             width: 8,
             height: 6,
@@ -190,7 +190,7 @@ mod tests {
 
     #[test]
     fn missed_pixels_have_no_depth_and_no_instance() {
-        let geometry = SceneGeometry::build([]);
+        let geometry = SceneGeometry::build([], []);
         let k = CameraIntrinsics {
             width: 4,
             height: 3,

@@ -97,8 +97,10 @@ impl SyntheticScene {
             })
             .collect();
         let background = room.surfaces();
-        let surfaces = background.iter().map(|(label, mesh)| (*label, mesh));
-        let geometry = SceneGeometry::build(surfaces.chain(objects.iter().map(|o| (o.label(), &o.mesh_in_world))));
+        let geometry = SceneGeometry::build(
+            background.iter().map(|(label, mesh)| (*label, mesh)),
+            objects.iter().map(|o| (o.label(), &o.mesh_in_world)),
+        );
         Ok(Self {
             seed,
             preset,

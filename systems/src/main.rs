@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
+mod cli_eval;
 mod cli_run;
 mod cli_synth;
 mod progress;
@@ -24,6 +25,8 @@ enum Command {
     Run(cli_run::RunArgs),
     /// Write a synthetic scene in the Replica (vMAP) layout, with ground-truth meshes.
     Synth(cli_synth::SynthArgs),
+    /// Score predicted object meshes against ground-truth meshes (accuracy, completion, C.R.).
+    Eval(cli_eval::EvalArgs),
     /// Print the default configuration as TOML (a config file lists only what it changes).
     Config,
 }
@@ -50,6 +53,7 @@ fn main() -> anyhow::Result<()> {
     {
         Command::Run(args) => cli_run::run(&args),
         Command::Synth(args) => cli_synth::synth(&args),
+        Command::Eval(args) => cli_eval::eval(&args),
         Command::Config => {
             print_stdout(&catmap::MapperConfig::default().to_toml());
             Ok(())

@@ -1,0 +1,461 @@
+//! vMAP's occupancy MLP (`model.py::OccupancyMap`) on a chunk of samples: fused forward,
+//! rendering, loss and backward.
+//!
+//! ```text
+//! emb = encode(x)                          (129; geo = emb[..87], col = emb[87..])
+//! h1 = relu(fc(87 → H)(geo))               in_layer
+//! h2 = relu(fc(H → H)(h1))                 mid1
+//! h3 = relu(fc(H + 87 → H)(h2 ‖ geo))      cat_layer
+//! h4 = relu(fc(H → H)(h3))                 mid2
+//! α  = 10 · fc(H → 1)(h4)                  out_alpha (no activation)
+//! h5 = relu(fc(H + 42 → H)(h4 ‖ col))      color_linear
+//! c  = sigmoid(fc(H → 3)(h5))              out_color
+//! ```
+//!
+//! A chunk is a run of whole rays of one field (`n` samples); all activations are sample-major
+//! `[n × 16k]` buffers, small enough to stay in L2. The backward pass walks the graph in
+//! reverse, reusing two gradient buffers, and accumulates packed gradients (see
+//! [`super::dense`]) plus the gradient of the encoding matrix B.
+
+use super::dense::{Activation, Dense, PackingPlan, Rows};
+use super::encoding::{self, COL_DIMS, EMB_LD, GEO_DIMS, TRIG_LD};
+use super::gemm::{Init, Post, padded};
+use super::layout::ParamLayout;
+use super::loss::{FieldLosses, LossNorm, ray_loss};
+use super::render::{RenderGrad, render_ray, render_ray_backward, sigmoid};
+use super::samples::RaySamples;
+use super::simd::Backend;
+
+/// α = ALPHA_SCALE · raw (vMAP's "unisurf" scaling).
+pub const ALPHA_SCALE: f32 = 10.0;
+
+/// The packed occupancy network of one hidden width.
+#[derive(Debug, Clone)]
+pub(crate) struct OccupancyNet {
+    /// Hidden width H.
+    pub hidden: usize,
+    layers: [Dense; 7],
+    b_param: usize,
+    b_grad: usize,
+    /// Floats of packed weights.
+    pub packed_len: usize,
+    /// Floats of packed gradient.
+    pub grad_len: usize,
+}
+
+/// Scratch buffers of one chunk (reused across chunks and steps).
+#[derive(Debug, Default)]
+pub(crate) struct OccupancyScratch {
+    emb: Vec<f32>,
+    dsin: Vec<f32>,
+    h: [Vec<f32>; 5],
+    alpha_raw: Vec<f32>,
+    colour_raw: Vec<f32>,
+    d_alpha: Vec<f32>,
+    d_colour: Vec<f32>,
+    p: Vec<f32>,
+    q: Vec<f32>,
+    d_geo: Vec<f32>,
+    d_col: Vec<f32>,
+    occ: Vec<f32>,
+    rgb: Vec<[f32; 3]>,
+    weights: Vec<f32>,
+    trans: Vec<f32>,
+    d_occ: Vec<f32>,
+    d_rgb: Vec<[f32; 3]>,
+}
+
+fn ensure(buf: &mut Vec<f32>, len: usize) {
+    if buf.len() < len {
+        buf.resize(len, 0.0);
+    }
+}
+
+impl OccupancyNet {
+    /// The network with `hidden` units.
+    pub(crate) fn new(hidden: usize) -> Self {
+        let layout = ParamLayout::occupancy(hidden);
+        let mut plan = PackingPlan::default();
+        let mut dense = |name: &str, out: usize, segments: &[usize]| {
+            plan.dense(
+                layout.offset(&format!("{name}.weight")),
+                layout.offset(&format!("{name}.bias")),
+                out,
+                segments,
+            )
+        };
+        let layers = [
+            dense("in_layer", hidden, &[GEO_DIMS]),
+            dense("mid1", hidden, &[hidden]),
+            dense("cat_layer", hidden, &[hidden, GEO_DIMS]),
+            dense("mid2", hidden, &[hidden]),
+            dense("out_alpha", 1, &[hidden]),
+            dense("color_linear", hidden, &[hidden, COL_DIMS]),
+            dense("out_color", 3, &[hidden]),
+        ];
+        let b_grad = plan.extra_grad(3 * encoding_rows());
+        let b_param = layout.offset("encoding.B");
+        Self {
+            hidden,
+            layers,
+            b_param,
+            b_grad,
+            packed_len: plan.packed_len,
+            grad_len: plan.grad_len,
+        }
+    }
+
+    /// Packs the canonical `params` into `packed`.
+    pub(crate) fn pack(&self, params: &[f32], packed: &mut [f32]) {
+        for layer in &self.layers {
+            layer.pack(params, packed);
+        }
+    }
+
+    /// Adds the packed gradient `grad` into the canonical gradient `out`.
+    pub(crate) fn unpack_grad(&self, grad: &[f32], out: &mut [f32]) {
+        for layer in &self.layers {
+            layer.unpack_grad(grad, out);
+        }
+        let n = 3 * encoding_rows();
+        for (d, g) in out[self.b_param..self.b_param + n]
+            .iter_mut()
+            .zip(&grad[self.b_grad..self.b_grad + n])
+        {
+            *d += g;
+        }
+    }
+
+    fn hp(&self) -> usize {
+        padded(self.hidden)
+    }
+
+    fn reserve(&self, s: &mut OccupancyScratch, n: usize) {
+        let hp = self.hp();
+        ensure(&mut s.emb, n * EMB_LD);
+        ensure(&mut s.dsin, n * TRIG_LD);
+        for h in &mut s.h {
+            ensure(h, n * hp);
+        }
+        for b in [&mut s.alpha_raw, &mut s.colour_raw, &mut s.d_alpha, &mut s.d_colour] {
+            ensure(b, n * 16);
+        }
+        ensure(&mut s.p, n * hp);
+        ensure(&mut s.q, n * hp);
+        ensure(&mut s.d_geo, n * padded(GEO_DIMS));
+        ensure(&mut s.d_col, n * padded(COL_DIMS));
+        for b in [&mut s.occ, &mut s.weights, &mut s.trans, &mut s.d_occ] {
+            ensure(b, n);
+        }
+        s.rgb.resize(n.max(s.rgb.len()), [0.0; 3]);
+        s.d_rgb.resize(n.max(s.d_rgb.len()), [0.0; 3]);
+    }
+
+    /// Forward pass of `points` into the scratch; the colour head only when `colour` is true.
+    pub(crate) fn forward(
+        &self,
+        backend: Backend,
+        params: &[f32],
+        packed: &[f32],
+        scale: f32,
+        points: &[[f32; 3]],
+        s: &mut OccupancyScratch,
+        heads: Heads,
+    ) {
+        let n = points.len();
+        let hp = self.hp();
+        self.reserve(s, n);
+        let b = &params[self.b_param..self.b_param + 3 * encoding_rows()];
+        encoding::encode_chunk(backend, points, scale, b, &mut s.emb, &mut s.dsin);
+        let geo = Rows {
+            data: &s.emb,
+            ld: EMB_LD,
+        };
+        let [h1, h2, h3, h4, h5] = &mut s.h;
+        let [l1, l2, l3, l4, la, l5, lc] = &self.layers;
+        l1.forward(backend, packed, n, &[geo], h1, Activation::Relu);
+        l2.forward(backend, packed, n, &[Rows { data: h1, ld: hp }], h2, Activation::Relu);
+        l3.forward(
+            backend,
+            packed,
+            n,
+            &[Rows { data: h2, ld: hp }, geo],
+            h3,
+            Activation::Relu,
+        );
+        l4.forward(backend, packed, n, &[Rows { data: h3, ld: hp }], h4, Activation::Relu);
+        la.forward(
+            backend,
+            packed,
+            n,
+            &[Rows { data: h4, ld: hp }],
+            &mut s.alpha_raw,
+            Activation::Linear,
+        );
+        for (o, a) in s.occ[..n].iter_mut().zip(s.alpha_raw.chunks_exact(16)) {
+            *o = sigmoid(ALPHA_SCALE * a[0]);
+        }
+        if heads == Heads::OccupancyOnly {
+            return;
+        }
+        let col = Rows {
+            data: &s.emb[GEO_DIMS..],
+            ld: EMB_LD,
+        };
+        l5.forward(
+            backend,
+            packed,
+            n,
+            &[Rows { data: h4, ld: hp }, col],
+            h5,
+            Activation::Relu,
+        );
+        lc.forward(
+            backend,
+            packed,
+            n,
+            &[Rows { data: h5, ld: hp }],
+            &mut s.colour_raw,
+            Activation::Linear,
+        );
+        for (c, r) in s.rgb[..n].iter_mut().zip(s.colour_raw.chunks_exact(16)) {
+            *c = [sigmoid(r[0]), sigmoid(r[1]), sigmoid(r[2])];
+        }
+    }
+
+    /// One fused training pass over rays `rays_range` of `rays`: forward, render, loss and
+    /// backward. Returns this chunk's share of the losses; gradients are added to `grad`.
+    pub(crate) fn train_chunk(
+        &self,
+        backend: Backend,
+        params: &[f32],
+        packed: &[f32],
+        scale: f32,
+        rays: &RaySamples,
+        rays_range: std::ops::Range<usize>,
+        norm: &LossNorm,
+        s: &mut OccupancyScratch,
+        grad: &mut [f32],
+    ) -> FieldLosses {
+        let spr = rays.samples_per_ray;
+        let samples = rays_range.start * spr..rays_range.end * spr;
+        let n = samples.len();
+        let hp = self.hp();
+        self.forward(
+            backend,
+            params,
+            packed,
+            scale,
+            &rays.points[samples.clone()],
+            s,
+            Heads::All,
+        );
+        let z = &rays.z[samples];
+
+        // Render, loss and gradients with respect to the raw head outputs.
+        let mut losses = FieldLosses::default();
+        s.d_alpha[..n * 16].fill(0.0);
+        s.d_colour[..n * 16].fill(0.0);
+        for (i, ray) in rays_range.enumerate() {
+            let r = i * spr..(i + 1) * spr;
+            let render = render_ray(
+                &s.occ[r.clone()],
+                &s.rgb[r.clone()],
+                &z[r.clone()],
+                &mut s.weights[r.clone()],
+                &mut s.trans[r.clone()],
+            );
+            let (l, g): (FieldLosses, RenderGrad) =
+                ray_loss(&render, rays.depth_m[ray], rays.rgb[ray], rays.states[ray], norm);
+            losses = losses.add(l);
+            render_ray_backward(
+                &g,
+                &s.occ[r.clone()],
+                &s.rgb[r.clone()],
+                &z[r.clone()],
+                &s.weights[r.clone()],
+                &s.trans[r.clone()],
+                &mut s.d_occ[r.clone()],
+                &mut s.d_rgb[r.clone()],
+            );
+            for k in r {
+                let o = s.occ[k];
+                s.d_alpha[k * 16] = ALPHA_SCALE * s.d_occ[k] * o * (1.0 - o);
+                for c in 0..3 {
+                    let v = s.rgb[k][c];
+                    s.d_colour[k * 16 + c] = s.d_rgb[k][c] * v * (1.0 - v);
+                }
+            }
+        }
+
+        // Backward through the MLP, heads first.
+        let [l1, l2, l3, l4, la, l5, lc] = &self.layers;
+        let [h1, h2, h3, h4, h5] = &s.h;
+        let geo = Rows {
+            data: &s.emb,
+            ld: EMB_LD,
+        };
+        let col = Rows {
+            data: &s.emb[GEO_DIMS..],
+            ld: EMB_LD,
+        };
+        let (p, q) = (&mut s.p, &mut s.q);
+        let (gp, cp) = (padded(GEO_DIMS), padded(COL_DIMS));
+        let d_colour = Rows {
+            data: &s.d_colour,
+            ld: 16,
+        };
+        let d_alpha = Rows {
+            data: &s.d_alpha,
+            ld: 16,
+        };
+        // out_color: p = d(h5 pre-activation)
+        lc.backward_weights(backend, n, &[Rows::new(h5, hp)], d_colour, grad);
+        lc.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            d_colour,
+            p,
+            hp,
+            Init::Zero,
+            Post::Mask { data: h5, ld: hp },
+        );
+        // color_linear: q = dh4 (from colour), d_col
+        l5.backward_weights(backend, n, &[Rows::new(h4, hp), col], Rows::new(p, hp), grad);
+        l5.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(p, hp),
+            q,
+            hp,
+            Init::Zero,
+            Post::Identity,
+        );
+        l5.backward_input(
+            backend,
+            packed,
+            n,
+            1,
+            Rows::new(p, hp),
+            &mut s.d_col,
+            cp,
+            Init::Zero,
+            Post::Identity,
+        );
+        // out_alpha: q = d(h4 pre-activation)
+        la.backward_weights(backend, n, &[Rows::new(h4, hp)], d_alpha, grad);
+        la.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            d_alpha,
+            q,
+            hp,
+            Init::Accumulate,
+            Post::Mask { data: h4, ld: hp },
+        );
+        // mid2: p = d(h3 pre)
+        l4.backward_weights(backend, n, &[Rows::new(h3, hp)], Rows::new(q, hp), grad);
+        l4.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(q, hp),
+            p,
+            hp,
+            Init::Zero,
+            Post::Mask { data: h3, ld: hp },
+        );
+        // cat_layer: q = d(h2 pre), d_geo
+        l3.backward_weights(backend, n, &[Rows::new(h2, hp), geo], Rows::new(p, hp), grad);
+        l3.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(p, hp),
+            q,
+            hp,
+            Init::Zero,
+            Post::Mask { data: h2, ld: hp },
+        );
+        l3.backward_input(
+            backend,
+            packed,
+            n,
+            1,
+            Rows::new(p, hp),
+            &mut s.d_geo,
+            gp,
+            Init::Zero,
+            Post::Identity,
+        );
+        // mid1: p = d(h1 pre)
+        l2.backward_weights(backend, n, &[Rows::new(h1, hp)], Rows::new(q, hp), grad);
+        l2.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(q, hp),
+            p,
+            hp,
+            Init::Zero,
+            Post::Mask { data: h1, ld: hp },
+        );
+        // in_layer: d_geo += …
+        l1.backward_weights(backend, n, &[geo], Rows::new(p, hp), grad);
+        l1.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(p, hp),
+            &mut s.d_geo,
+            gp,
+            Init::Accumulate,
+            Post::Identity,
+        );
+        let gb = &mut grad[self.b_grad..self.b_grad + 3 * encoding_rows()];
+        encoding::backward_chunk(&s.emb, &s.dsin, &s.d_geo, gp, &s.d_col, cp, n, gb);
+        losses
+    }
+
+    /// Occupancy of the last forward pass (n values).
+    pub(crate) fn occupancy<'a>(&self, s: &'a OccupancyScratch, n: usize) -> &'a [f32] {
+        &s.occ[..n]
+    }
+
+    /// Raw α (= 10·raw) of the last forward pass.
+    pub(crate) fn alpha(&self, s: &OccupancyScratch, n: usize) -> Vec<f32> {
+        s.alpha_raw
+            .chunks_exact(16)
+            .take(n)
+            .map(|a| ALPHA_SCALE * a[0])
+            .collect()
+    }
+
+    /// Colours of the last forward pass with [`Heads::All`].
+    pub(crate) fn colour<'a>(&self, s: &'a OccupancyScratch, n: usize) -> &'a [[f32; 3]] {
+        &s.rgb[..n]
+    }
+}
+
+/// Which heads a forward pass evaluates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Heads {
+    /// Occupancy only (meshing, uncertainty).
+    OccupancyOnly,
+    /// Occupancy and colour.
+    All,
+}
+
+const fn encoding_rows() -> usize {
+    super::directions::NUM_DIRECTIONS
+}

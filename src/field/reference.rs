@@ -1,0 +1,368 @@
+//! The same models in candle autograd (`Var`, `backward`), built from the same flat weights:
+//! the reference the fused kernels are checked against, and the candle baseline of the bench.
+//!
+//! Everything here follows the math of the fused modules literally (concatenations, a running
+//! product for the transmittance, `detach` on the variance, masked means), in the dtype asked
+//! for (f64 for gradient checks). It is slow and allocates freely; it is not used for training.
+
+use candle_core::{D, DType, Device, Tensor, Var};
+
+use super::adamw::AdamWConfig;
+use super::directions::NUM_DIRECTIONS;
+use super::encoding::{GEO_DIMS, NUM_BANDS};
+use super::layout::ParamLayout;
+use super::loss::{COLOUR_WEIGHT, DEPTH_STD_EPS, OPACITY_WEIGHT};
+use super::occupancy::ALPHA_SCALE;
+use super::render::FREE_EPS;
+use super::samples::RaySamples;
+use crate::error::{CatmapError, Result};
+use crate::object_view::PixelState;
+
+fn ce(e: candle_core::Error) -> CatmapError {
+    CatmapError::Degenerate(format!("candle: {e}"))
+}
+
+/// Forward values and gradients of the reference occupancy model on one field's rays.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ReferenceOutput {
+    /// Total loss L_depth + 5 L_colour + 10 L_opacity.
+    pub total: f64,
+    /// L_depth.
+    pub depth: f64,
+    /// L_colour.
+    pub colour: f64,
+    /// L_opacity.
+    pub opacity: f64,
+    /// Rendered depth per ray.
+    pub rendered_depth: Vec<f64>,
+    /// Rendered colour per ray.
+    pub rendered_colour: Vec<[f64; 3]>,
+    /// Rendered opacity per ray.
+    pub rendered_opacity: Vec<f64>,
+    /// Gradient of the total, flat in [`ParamLayout`] order.
+    pub grad: Vec<f64>,
+}
+
+/// One Var per named tensor of `layout`, built from `params`.
+fn vars(layout: &ParamLayout, params: &[f32], dtype: DType) -> Result<Vec<Var>> {
+    layout
+        .tensors()
+        .iter()
+        .map(|t| {
+            let shape: Vec<usize> = if t.shape[1] == 1 && t.name.ends_with(".bias") {
+                vec![t.shape[0]]
+            } else {
+                t.shape.to_vec()
+            };
+            let tensor = Tensor::from_slice(&params[t.range()], shape, &Device::Cpu)
+                .and_then(|x| x.to_dtype(dtype))
+                .map_err(ce)?;
+            Var::from_tensor(&tensor).map_err(ce)
+        })
+        .collect()
+}
+
+/// Gradients of every Var, flat in layout order (zeros where a tensor got none).
+fn flat_grads(layout: &ParamLayout, vars: &[Var], loss: &Tensor) -> Result<Vec<f64>> {
+    let grads = loss.backward().map_err(ce)?;
+    let mut out = vec![0.0; layout.len()];
+    for (t, v) in layout.tensors().iter().zip(vars) {
+        if let Some(g) = grads.get(v.as_tensor()) {
+            let g = g
+                .flatten_all()
+                .and_then(|g| g.to_dtype(DType::F64))
+                .and_then(|g| g.to_vec1::<f64>())
+                .map_err(ce)?;
+            out[t.range()].copy_from_slice(&g);
+        }
+    }
+    Ok(out)
+}
+
+fn linear(x: &Tensor, w: &Var, b: &Var) -> candle_core::Result<Tensor> {
+    x.matmul(&w.as_tensor().t()?)?.broadcast_add(b.as_tensor())
+}
+
+fn sigmoid(x: &Tensor) -> candle_core::Result<Tensor> {
+    (x.neg()?.exp()? + 1.0)?.recip()
+}
+
+fn column(values: &[f64], dtype: DType) -> candle_core::Result<Tensor> {
+    Tensor::from_slice(values, values.len(), &Device::Cpu)?.to_dtype(dtype)
+}
+
+/// The occupancy model (H = `hidden`, encoding scale `scale`) on `rays` with candle autograd.
+pub fn occupancy_reference(
+    hidden: usize,
+    scale: f32,
+    params: &[f32],
+    rays: &RaySamples,
+    dtype: DType,
+) -> Result<ReferenceOutput> {
+    rays.validate()?;
+    let layout = ParamLayout::occupancy(hidden);
+    let vars = vars(&layout, params, dtype)?;
+    let var = |name: &str| -> Result<&Var> {
+        layout
+            .tensors()
+            .iter()
+            .position(|t| t.name == name)
+            .map(|i| &vars[i])
+            .ok_or_else(|| CatmapError::Degenerate(format!("no tensor {name}")))
+    };
+    let (r, s) = (rays.num_rays(), rays.samples_per_ray);
+    let n = r * s;
+    let build = || -> Result<(Tensor, Tensor, Tensor, Tensor, Tensor, Tensor, Tensor)> {
+        let flat: Vec<f32> = rays.points.iter().flatten().copied().collect();
+        let pts = Tensor::from_slice(&flat, (n, 3), &Device::Cpu)
+            .and_then(|p| p.to_dtype(dtype))
+            .map_err(ce)?;
+        let xs = (pts / f64::from(scale)).map_err(ce)?;
+        let proj = xs
+            .matmul(&var("encoding.B")?.as_tensor().t().map_err(ce)?)
+            .map_err(ce)?;
+        let mut parts = vec![xs.clone()];
+        for k in 0..NUM_BANDS {
+            let f = std::f64::consts::PI * f64::from(1u32 << k);
+            parts.push((&proj * f).and_then(|x| x.sin()).map_err(ce)?);
+        }
+        let emb = Tensor::cat(&parts, 1).map_err(ce)?;
+        debug_assert_eq!(emb.dims(), [n, 3 + NUM_BANDS * NUM_DIRECTIONS]);
+        let geo = emb.narrow(1, 0, GEO_DIMS).map_err(ce)?;
+        let col = emb
+            .narrow(1, GEO_DIMS, emb.dim(1).map_err(ce)? - GEO_DIMS)
+            .map_err(ce)?;
+        let fc = |x: &Tensor, name: &str| -> Result<Tensor> {
+            linear(x, var(&format!("{name}.weight"))?, var(&format!("{name}.bias"))?).map_err(ce)
+        };
+        let h1 = fc(&geo, "in_layer")?.relu().map_err(ce)?;
+        let h2 = fc(&h1, "mid1")?.relu().map_err(ce)?;
+        let h3 = fc(&Tensor::cat(&[&h2, &geo], 1).map_err(ce)?, "cat_layer")?
+            .relu()
+            .map_err(ce)?;
+        let h4 = fc(&h3, "mid2")?.relu().map_err(ce)?;
+        let alpha = (fc(&h4, "out_alpha")? * f64::from(ALPHA_SCALE)).map_err(ce)?;
+        let h5 = fc(&Tensor::cat(&[&h4, &col], 1).map_err(ce)?, "color_linear")?
+            .relu()
+            .map_err(ce)?;
+        let colour = sigmoid(&fc(&h5, "out_color")?)
+            .map_err(ce)?
+            .reshape((r, s, 3))
+            .map_err(ce)?;
+        let occ = sigmoid(&alpha).and_then(|o| o.reshape((r, s))).map_err(ce)?;
+        // Transmittance by a running product over the samples of each ray.
+        let free = ((occ.neg().map_err(ce)? + 1.0).map_err(ce)? + f64::from(FREE_EPS)).map_err(ce)?;
+        let mut t_cols = vec![Tensor::ones((r, 1), dtype, &Device::Cpu).map_err(ce)?];
+        for i in 1..s {
+            let prev = t_cols[i - 1].mul(&free.narrow(1, i - 1, 1).map_err(ce)?).map_err(ce)?;
+            t_cols.push(prev);
+        }
+        let trans = Tensor::cat(&t_cols, 1).map_err(ce)?;
+        let w = occ.mul(&trans).map_err(ce)?;
+        let zf: Vec<f64> = rays.z.iter().map(|v| f64::from(*v)).collect();
+        let z = column(&zf, dtype).and_then(|z| z.reshape((r, s))).map_err(ce)?;
+        let depth = w.mul(&z).and_then(|x| x.sum(1)).map_err(ce)?;
+        let rgb = w
+            .unsqueeze(2)
+            .and_then(|w| w.broadcast_mul(&colour))
+            .and_then(|x| x.sum(1))
+            .map_err(ce)?;
+        let opacity = w.sum(1).map_err(ce)?;
+        let diff = z.broadcast_sub(&depth.unsqueeze(1).map_err(ce)?).map_err(ce)?;
+        let var_z = w
+            .mul(&diff.sqr().map_err(ce)?)
+            .and_then(|x| x.sum(1))
+            .map_err(ce)?
+            .detach();
+        Ok((depth, rgb, opacity, var_z, w, trans, occ))
+    };
+    let (depth, rgb, opacity, var_z, ..) = build()?;
+
+    // Masks and targets.
+    let obj: Vec<f64> = rays
+        .states
+        .iter()
+        .map(|s| f64::from(u8::from(*s != PixelState::OtherObject)))
+        .collect();
+    let known: Vec<f64> = rays
+        .states
+        .iter()
+        .map(|s| f64::from(u8::from(*s != PixelState::Unknown)))
+        .collect();
+    let this: Vec<f64> = rays
+        .states
+        .iter()
+        .map(|s| f64::from(u8::from(*s == PixelState::ThisObject)))
+        .collect();
+    let md: Vec<f64> = obj
+        .iter()
+        .zip(&rays.depth_m)
+        .map(|(o, d)| if *d > 0.0 { *o } else { 0.0 })
+        .collect();
+    let gt_d: Vec<f64> = rays.depth_m.iter().map(|v| f64::from(*v)).collect();
+    let gt_c: Vec<f64> = rays.rgb.iter().flatten().map(|v| f64::from(*v)).collect();
+    let mean = |masked: Tensor, mask: &[f64]| -> Result<Tensor> {
+        let count: f64 = mask.iter().sum();
+        let factor = if count == 0.0 { 0.0 } else { 1.0 / (count + 1e-10) };
+        (masked.sum_all().map_err(ce)? * factor).map_err(ce)
+    };
+    let l_depth = {
+        let res = depth
+            .sub(&column(&gt_d, dtype).map_err(ce)?)
+            .and_then(|x| x.abs())
+            .map_err(ce)?;
+        let info = (var_z.sqrt().map_err(ce)? + f64::from(DEPTH_STD_EPS))
+            .and_then(|x| x.recip())
+            .map_err(ce)?;
+        mean(
+            res.mul(&info).and_then(|x| x.mul(&column(&md, dtype)?)).map_err(ce)?,
+            &md,
+        )?
+    };
+    let l_colour = {
+        let gt = column(&gt_c, dtype).and_then(|c| c.reshape((r, 3))).map_err(ce)?;
+        let res = rgb.sub(&gt).and_then(|x| x.abs()).and_then(|x| x.sum(1)).map_err(ce)?;
+        mean(res.mul(&column(&obj, dtype).map_err(ce)?).map_err(ce)?, &obj)?
+    };
+    let l_opacity = {
+        let res = opacity
+            .sub(&column(&this, dtype).map_err(ce)?)
+            .and_then(|x| x.abs())
+            .map_err(ce)?;
+        mean(res.mul(&column(&known, dtype).map_err(ce)?).map_err(ce)?, &known)?
+    };
+    let total = ((&l_depth + (&l_colour * f64::from(COLOUR_WEIGHT)).map_err(ce)?).map_err(ce)?
+        + (&l_opacity * f64::from(OPACITY_WEIGHT)).map_err(ce)?)
+    .map_err(ce)?;
+    let scalar = |t: &Tensor| t.to_dtype(DType::F64).and_then(|t| t.to_scalar::<f64>()).map_err(ce);
+    let vec1 = |t: &Tensor| t.to_dtype(DType::F64).and_then(|t| t.to_vec1::<f64>()).map_err(ce);
+    let rgb2 = rgb.to_dtype(DType::F64).and_then(|t| t.to_vec2::<f64>()).map_err(ce)?;
+    Ok(ReferenceOutput {
+        total: scalar(&total)?,
+        depth: scalar(&l_depth)?,
+        colour: scalar(&l_colour)?,
+        opacity: scalar(&l_opacity)?,
+        rendered_depth: vec1(&depth)?,
+        rendered_colour: rgb2.iter().map(|c| [c[0], c[1], c[2]]).collect(),
+        rendered_opacity: vec1(&opacity)?,
+        grad: flat_grads(&layout, &vars, &total)?,
+    })
+}
+
+/// A plain ReLU MLP (`dims`), L1 loss mean over `[N × dL]`: returns the loss and the gradient.
+pub fn mlp_reference(
+    dims: &[usize],
+    params: &[f32],
+    inputs: &[f32],
+    targets: &[f32],
+    dtype: DType,
+) -> Result<(f64, Vec<f64>)> {
+    let layout = ParamLayout::mlp(dims);
+    let vars = vars(&layout, params, dtype)?;
+    let n = inputs.len() / dims[0];
+    let mut h = Tensor::from_slice(inputs, (n, dims[0]), &Device::Cpu)
+        .and_then(|x| x.to_dtype(dtype))
+        .map_err(ce)?;
+    let layers = dims.len() - 1;
+    for l in 0..layers {
+        h = linear(&h, &vars[2 * l], &vars[2 * l + 1]).map_err(ce)?;
+        if l + 1 < layers {
+            h = h.relu().map_err(ce)?;
+        }
+    }
+    let t = Tensor::from_slice(targets, h.dims(), &Device::Cpu)
+        .and_then(|x| x.to_dtype(dtype))
+        .map_err(ce)?;
+    let loss = h.sub(&t).and_then(|x| x.abs()).and_then(|x| x.mean_all()).map_err(ce)?;
+    let value = loss
+        .to_dtype(DType::F64)
+        .and_then(|x| x.to_scalar::<f64>())
+        .map_err(ce)?;
+    Ok((value, flat_grads(&layout, &vars, &loss)?))
+}
+
+/// B plain MLPs trained with candle autograd, batched as 3-D matmuls (vMAP's `vmap` shape), with
+/// AdamW written in tensor ops: the candle baseline of the benchmark.
+#[derive(Debug)]
+pub struct CandleMlpBatch {
+    weights: Vec<Var>,
+    biases: Vec<Var>,
+    moments: Vec<(Tensor, Tensor)>,
+    optim: AdamWConfig,
+    step: i32,
+}
+
+impl CandleMlpBatch {
+    /// Builds the batch from per-MLP flat parameters (in [`ParamLayout::mlp`] order).
+    pub fn new(dims: &[usize], params: &[&[f32]], optim: AdamWConfig) -> Result<Self> {
+        let layout = ParamLayout::mlp(dims);
+        let (mut weights, mut biases, mut moments) = (Vec::new(), Vec::new(), Vec::new());
+        for l in 0..dims.len() - 1 {
+            let (w, b) = (&layout.tensors()[2 * l], &layout.tensors()[2 * l + 1]);
+            let stack = |spec: &super::layout::TensorSpec, shape: &[usize]| -> candle_core::Result<Tensor> {
+                let parts = params
+                    .iter()
+                    .map(|p| Tensor::from_slice(&p[spec.range()], spec.shape.to_vec(), &Device::Cpu))
+                    .collect::<candle_core::Result<Vec<_>>>()?;
+                Tensor::stack(&parts, 0)?.reshape(shape)
+            };
+            let bsz = params.len();
+            // W stored as (B, in, out) so that h = x · W.
+            let wt = stack(w, &[bsz, dims[l + 1], dims[l]])
+                .and_then(|t| t.transpose(1, 2))
+                .and_then(|t| t.contiguous())
+                .map_err(ce)?;
+            let bt = stack(b, &[bsz, 1, dims[l + 1]]).map_err(ce)?;
+            for t in [&wt, &bt] {
+                moments.push((t.zeros_like().map_err(ce)?, t.zeros_like().map_err(ce)?));
+            }
+            weights.push(Var::from_tensor(&wt).map_err(ce)?);
+            biases.push(Var::from_tensor(&bt).map_err(ce)?);
+        }
+        Ok(Self {
+            weights,
+            biases,
+            moments,
+            optim,
+            step: 0,
+        })
+    }
+
+    /// One step on inputs `(B, N, d0)` and targets `(B, N, dL)`; returns the summed loss.
+    pub fn step(&mut self, inputs: &Tensor, targets: &Tensor) -> Result<f32> {
+        let mut run = || -> candle_core::Result<f32> {
+            let mut h = inputs.clone();
+            let layers = self.weights.len();
+            for l in 0..layers {
+                h = h
+                    .matmul(self.weights[l].as_tensor())?
+                    .broadcast_add(self.biases[l].as_tensor())?;
+                if l + 1 < layers {
+                    h = h.relu()?;
+                }
+            }
+            let loss = h
+                .sub(targets)?
+                .abs()?
+                .mean_keepdim(D::Minus1)?
+                .mean_keepdim(D::Minus2)?
+                .sum_all()?;
+            let grads = loss.backward()?;
+            self.step += 1;
+            let c = self.optim;
+            let bc1 = 1.0 - f64::from(c.beta1).powi(self.step);
+            let bc2 = 1.0 - f64::from(c.beta2).powi(self.step);
+            let params = self.weights.iter().zip(&self.biases).flat_map(|(w, b)| [w, b]);
+            for (var, (m, v)) in params.zip(&mut self.moments) {
+                let Some(g) = grads.get(var.as_tensor()) else { continue };
+                *m = ((&*m * f64::from(c.beta1))? + (g * (1.0 - f64::from(c.beta1)))?)?;
+                *v = ((&*v * f64::from(c.beta2))? + (g.sqr()? * (1.0 - f64::from(c.beta2)))?)?;
+                let decayed = (var.as_tensor() * (1.0 - f64::from(c.lr * c.weight_decay)))?;
+                let upd = ((&*m / bc1)? / ((&*v / bc2)?.sqrt()? + f64::from(c.eps))?)?;
+                var.set(&(decayed - (upd * f64::from(c.lr))?)?)?;
+            }
+            loss.to_scalar::<f32>()
+        };
+        run().map_err(ce)
+    }
+}

@@ -1,0 +1,67 @@
+//! Training samples of one step: per field, R rays × S samples along each ray.
+//!
+//! Samples are stored ray by ray (the S samples of ray r at `r·S .. (r+1)·S`, in increasing
+//! depth), with one target per ray: the measured depth, colour and the pixel's state relative
+//! to the field's object.
+
+use crate::error::{CatmapError, Result};
+use crate::object_view::PixelState;
+
+/// One field's rays for one training step.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RaySamples {
+    /// Samples per ray (S).
+    pub samples_per_ray: usize,
+    /// Sample positions, `R·S`, in the frame the field is defined in (world for vMAP).
+    pub points: Vec<[f32; 3]>,
+    /// Depth of each sample along its ray (camera z, same unit as `depth_m`), `R·S`.
+    pub z: Vec<f32>,
+    /// Measured depth of each ray's pixel in metres; 0 = invalid. `R`.
+    pub depth_m: Vec<f32>,
+    /// Measured colour of each ray's pixel in [0, 1]. `R`.
+    pub rgb: Vec<[f32; 3]>,
+    /// State of each ray's pixel relative to the field's object. `R`.
+    pub states: Vec<PixelState>,
+}
+
+impl RaySamples {
+    /// Number of rays.
+    pub fn num_rays(&self) -> usize {
+        self.depth_m.len()
+    }
+
+    /// Number of samples (rays × samples per ray).
+    pub fn num_samples(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Checks that the arrays agree in length.
+    pub fn validate(&self) -> Result<()> {
+        let rays = self.num_rays();
+        let ok = self.samples_per_ray > 0
+            && self.points.len() == rays * self.samples_per_ray
+            && self.z.len() == self.points.len()
+            && self.rgb.len() == rays
+            && self.states.len() == rays;
+        if ok {
+            Ok(())
+        } else {
+            Err(CatmapError::Degenerate(format!(
+                "ray samples: {} rays × {} samples, but {} points, {} depths, {} colours, {} states",
+                rays,
+                self.samples_per_ray,
+                self.points.len(),
+                self.z.len(),
+                self.rgb.len(),
+                self.states.len()
+            )))
+        }
+    }
+}
+
+/// The samples of one training step: one [`RaySamples`] per field, in the batch's field order.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SampleBatch {
+    /// Per-field rays.
+    pub fields: Vec<RaySamples>,
+}

@@ -1,0 +1,119 @@
+//! Markdown tables of an [`EvaluationReport`]: per object, per class, and the mean.
+
+use std::fmt::Write as _;
+
+use super::object_scores::PredictionStatus;
+use super::report::{EvaluationReport, MetricSummary};
+
+/// Column headers of the score columns.
+const SCORE_HEADER: &str = "Acc. [cm] | Comp. [cm] | C.R. <5cm [%] | C.R. <1cm [%]";
+const SCORE_ALIGN: &str = "---:|---:|---:|---:";
+
+/// Renders `report` as three Markdown tables: objects, classes and the mean over objects.
+/// A distance that does not exist (missing object, nothing in the crop) shows as `–`.
+pub fn render_markdown(report: &EvaluationReport) -> String {
+    let s = &report.settings;
+    let mut out = format!(
+        "# Reconstruction metrics\n\ncrop: {}, {} samples per mesh, seed {}; {} objects, {} missing\n\n",
+        s.crop, s.samples_per_mesh, s.seed, report.mean.objects, report.mean.missing
+    );
+    out.push_str(&format!(
+        "## Objects\n\n| object | class | {SCORE_HEADER} |\n|---:|---|{SCORE_ALIGN}|\n"
+    ));
+    for o in &report.objects {
+        let v = &o.scores;
+        let row = match v.status {
+            PredictionStatus::Missing => "missing | missing | 0.0 | 0.0".to_owned(),
+            PredictionStatus::Reconstructed => scores(
+                v.accuracy_cm,
+                v.completion_cm,
+                v.completion_ratio_pct,
+                v.completion_ratio_1cm_pct,
+            ),
+        };
+        let _ = writeln!(out, "| {} | {} | {row} |", o.id, o.class_name);
+    }
+    out.push_str(&format!(
+        "\n## Classes\n\n| class | objects | missing | {SCORE_HEADER} |\n|---|---:|---:|{SCORE_ALIGN}|\n"
+    ));
+    for (name, summary) in &report.classes {
+        let _ = writeln!(out, "| {name} | {} |", summary_cells(summary));
+    }
+    out.push_str(&format!(
+        "\n## Mean over objects\n\n| objects | missing | {SCORE_HEADER} |\n|---:|---:|{SCORE_ALIGN}|\n"
+    ));
+    let _ = writeln!(out, "| {} |", summary_cells(&report.mean));
+    out
+}
+
+fn summary_cells(s: &MetricSummary) -> String {
+    let v = scores(
+        s.accuracy_cm,
+        s.completion_cm,
+        s.completion_ratio_pct,
+        s.completion_ratio_1cm_pct,
+    );
+    format!("{} | {} | {v}", s.objects, s.missing)
+}
+
+fn scores(accuracy_cm: Option<f32>, completion_cm: Option<f32>, ratio_pct: f32, ratio_1cm_pct: f32) -> String {
+    format!(
+        "{} | {} | {ratio_pct:.1} | {ratio_1cm_pct:.1}",
+        distance(accuracy_cm),
+        distance(completion_cm)
+    )
+}
+
+fn distance(cm: Option<f32>) -> String {
+    cm.map_or_else(|| "–".to_owned(), |d| format!("{d:.2}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ids::ObjectId;
+    use crate::metrics::{EvalSettings, ObjectMetrics, ObjectScores};
+
+    #[test]
+    fn tables_list_objects_classes_and_the_mean() {
+        let scores = ObjectScores {
+            status: PredictionStatus::Reconstructed,
+            accuracy_cm: Some(1.234),
+            completion_cm: Some(2.5),
+            completion_ratio_pct: 96.0,
+            completion_ratio_1cm_pct: 40.0,
+            accuracy_samples: 10,
+        };
+        let objects = vec![
+            ObjectMetrics {
+                id: ObjectId(4),
+                class: None,
+                class_name: "chair".into(),
+                scores,
+            },
+            ObjectMetrics {
+                id: ObjectId(7),
+                class: None,
+                class_name: "chair".into(),
+                scores: ObjectScores::missing(),
+            },
+        ];
+        let text = render_markdown(&EvaluationReport::new(EvalSettings::default(), objects));
+        assert!(
+            text.contains("| 4 | chair | 1.23 | 2.50 | 96.0 | 40.0 |"),
+            "object row:\n{text}"
+        );
+        assert!(
+            text.contains("| 7 | chair | missing | missing | 0.0 | 0.0 |"),
+            "missing row:\n{text}"
+        );
+        assert!(
+            text.contains("| chair | 2 | 1 | 1.23 | 2.50 | 48.0 | 20.0 |"),
+            "class row:\n{text}"
+        );
+        assert!(
+            text.contains("| 2 | 1 | 1.23 | 2.50 | 48.0 | 20.0 |"),
+            "mean row:\n{text}"
+        );
+    }
+}

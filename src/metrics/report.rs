@@ -1,0 +1,192 @@
+//! A scene's evaluation: per-object scores, per-class summaries and the mean over objects.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use super::crop::Crop;
+use super::object_scores::{ObjectScores, PredictionStatus, SAMPLES_PER_MESH};
+use crate::ids::{ClassId, ObjectId};
+
+/// How a scene is evaluated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EvalSettings {
+    /// Which samples are cropped to the ground-truth box.
+    pub crop: Crop,
+    /// Seed of the surface sampling; object `id` samples from stream `(seed, id)`.
+    pub seed: u64,
+    /// Surface samples per mesh.
+    pub samples_per_mesh: usize,
+}
+
+impl Default for EvalSettings {
+    fn default() -> Self {
+        Self {
+            crop: Crop::Paper,
+            seed: 0,
+            samples_per_mesh: SAMPLES_PER_MESH,
+        }
+    }
+}
+
+/// The scores of one ground-truth object, with its identity.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObjectMetrics {
+    /// Instance id of the ground-truth object.
+    pub id: ObjectId,
+    /// Semantic class, when known.
+    pub class: Option<ClassId>,
+    /// Class name used to group objects (`unknown` when not known).
+    pub class_name: String,
+    /// The scores.
+    pub scores: ObjectScores,
+}
+
+/// Aggregate of a set of objects. Distances average over the objects that have them (missing
+/// objects have no completion, i.e. an infinite one, and are counted in `missing` instead);
+/// completion ratios average over all objects, a missing object counting 0 %.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MetricSummary {
+    /// Objects in the set.
+    pub objects: usize,
+    /// Objects without prediction.
+    pub missing: usize,
+    /// Mean accuracy over the objects with one, cm.
+    pub accuracy_cm: Option<f32>,
+    /// Mean completion over the objects with one, cm.
+    pub completion_cm: Option<f32>,
+    /// Mean 5 cm completion ratio over all objects, %.
+    pub completion_ratio_pct: f32,
+    /// Mean 1 cm completion ratio over all objects, %.
+    pub completion_ratio_1cm_pct: f32,
+}
+
+impl MetricSummary {
+    /// Summarises `objects`.
+    pub fn of<'a>(objects: impl IntoIterator<Item = &'a ObjectMetrics>) -> Self {
+        let scores: Vec<&ObjectScores> = objects.into_iter().map(|o| &o.scores).collect();
+        let ratio_mean = |ratio: fn(&ObjectScores) -> f32| mean(scores.iter().map(|s| ratio(s))).unwrap_or(0.0);
+        Self {
+            objects: scores.len(),
+            missing: scores.iter().filter(|s| s.status == PredictionStatus::Missing).count(),
+            accuracy_cm: mean(scores.iter().filter_map(|s| s.accuracy_cm)),
+            completion_cm: mean(scores.iter().filter_map(|s| s.completion_cm)),
+            completion_ratio_pct: ratio_mean(|s| s.completion_ratio_pct),
+            completion_ratio_1cm_pct: ratio_mean(|s| s.completion_ratio_1cm_pct),
+        }
+    }
+}
+
+/// Mean of `values` (in f64), `None` for none.
+fn mean(values: impl Iterator<Item = f32>) -> Option<f32> {
+    let (sum, count) = values.fold((0.0_f64, 0usize), |(s, n), v| (s + f64::from(v), n + 1));
+    (count > 0).then(|| (sum / count as f64) as f32)
+}
+
+/// Everything an evaluation found, ready for JSON or [`super::render_markdown`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EvaluationReport {
+    /// How the scene was evaluated.
+    pub settings: EvalSettings,
+    /// Per object, in id order.
+    pub objects: Vec<ObjectMetrics>,
+    /// Per class name, in name order.
+    pub classes: BTreeMap<String, MetricSummary>,
+    /// Over all objects.
+    pub mean: MetricSummary,
+}
+
+impl EvaluationReport {
+    /// Sorts `objects` by id and aggregates them per class and overall.
+    pub fn new(settings: EvalSettings, mut objects: Vec<ObjectMetrics>) -> Self {
+        objects.sort_by_key(|o| o.id);
+        let mut by_class: BTreeMap<String, Vec<&ObjectMetrics>> = BTreeMap::new();
+        for o in &objects {
+            by_class.entry(o.class_name.clone()).or_default().push(o);
+        }
+        let classes = by_class
+            .into_iter()
+            .map(|(name, members)| (name, MetricSummary::of(members)))
+            .collect();
+        let mean = MetricSummary::of(&objects);
+        Self {
+            settings,
+            objects,
+            classes,
+            mean,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn object(id: u32, class_name: &str, scores: ObjectScores) -> ObjectMetrics {
+        ObjectMetrics {
+            id: ObjectId(id),
+            class: None,
+            class_name: class_name.to_owned(),
+            scores,
+        }
+    }
+
+    fn reconstructed(accuracy: f32, completion: f32, ratio: f32) -> ObjectScores {
+        ObjectScores {
+            status: PredictionStatus::Reconstructed,
+            accuracy_cm: Some(accuracy),
+            completion_cm: Some(completion),
+            completion_ratio_pct: ratio,
+            completion_ratio_1cm_pct: ratio / 2.0,
+            accuracy_samples: 10,
+        }
+    }
+
+    #[test]
+    fn missing_objects_count_zero_ratio_and_no_distance() {
+        let objects = vec![
+            object(3, "chair", ObjectScores::missing()),
+            object(1, "chair", reconstructed(1.0, 2.0, 90.0)),
+            object(2, "table", reconstructed(3.0, 4.0, 70.0)),
+        ];
+        let report = EvaluationReport::new(EvalSettings::default(), objects);
+        assert_eq!(
+            report.objects.iter().map(|o| o.id.0).collect::<Vec<_>>(),
+            [1, 2, 3],
+            "sorted by id"
+        );
+        let chair = report.classes["chair"];
+        assert_eq!((chair.objects, chair.missing), (2, 1));
+        assert_eq!(
+            (chair.accuracy_cm, chair.completion_cm),
+            (Some(1.0), Some(2.0)),
+            "distances skip the missing chair"
+        );
+        assert_eq!(chair.completion_ratio_pct, 45.0, "the missing chair counts 0 %");
+        assert_eq!(report.mean.completion_cm, Some(3.0));
+        assert!((report.mean.completion_ratio_pct - 160.0 / 3.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn a_report_round_trips_through_json() {
+        let report = EvaluationReport::new(
+            EvalSettings {
+                crop: Crop::Vmap,
+                seed: 4,
+                samples_per_mesh: 100,
+            },
+            vec![
+                object(1, "box", reconstructed(0.25, 1.5, 99.5)),
+                object(2, "box", ObjectScores::missing()),
+            ],
+        );
+        let text = serde_json::to_string(&report).expect("serialisable");
+        assert!(
+            text.contains("\"crop\":\"vmap\"") && text.contains("\"completion_cm\":null"),
+            "{text}"
+        );
+        let back: EvaluationReport = serde_json::from_str(&text).expect("parses back");
+        assert_eq!(back, report);
+    }
+}

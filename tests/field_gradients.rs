@@ -1,0 +1,271 @@
+//! The fused field kernels against candle autograd (f64) on random batches: forward (renders,
+//! losses), every parameter's gradient (the trainable encoding matrix B included), one AdamW
+//! step against a hand-computed update, and bit-identical results across thread counts.
+
+use candle_core::DType;
+use catmap::field::reference::{mlp_reference, occupancy_reference};
+use catmap::field::{AdamWConfig, Backend, FieldBatch, MlpBatch, OccupancyField, ParamLayout, RaySamples, SampleBatch};
+use catmap::ids::ObjectId;
+use catmap::object_view::PixelState;
+use catmap::rng::{RngStream, seeded_rng};
+use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
+
+/// Random rays of one field: points in a ±1.5 m box, increasing sample depths, some invalid
+/// depths, all three pixel states.
+fn random_rays(rng: &mut ChaCha8Rng, rays: usize, samples_per_ray: usize) -> RaySamples {
+    let mut out = RaySamples {
+        samples_per_ray,
+        ..RaySamples::default()
+    };
+    for _ in 0..rays {
+        let origin: [f32; 3] = std::array::from_fn(|_| rng.random_range(-1.5..1.5));
+        let dir: [f32; 3] = std::array::from_fn(|_| rng.random_range(-0.5..0.5));
+        let mut z = rng.random_range(0.2f32..0.6);
+        for _ in 0..samples_per_ray {
+            out.points.push(std::array::from_fn(|c| origin[c] + z * dir[c]));
+            out.z.push(z);
+            z += rng.random_range(0.01f32..0.2);
+        }
+        out.depth_m.push(if rng.random_range(0.0..1.0) < 0.15 {
+            0.0
+        } else {
+            rng.random_range(0.3..2.0)
+        });
+        out.rgb.push(std::array::from_fn(|_| rng.random_range(0.0..1.0)));
+        out.states.push(match rng.random_range(0..3) {
+            0 => PixelState::OtherObject,
+            1 => PixelState::ThisObject,
+            _ => PixelState::Unknown,
+        });
+    }
+    out
+}
+
+/// Worst norm-relative error over tensors: ‖a − b‖ / max(‖b‖, 1e-2·‖b_all‖). The floor keeps a
+/// tensor whose gradient nearly cancels (a one-element bias summed over all samples) from turning
+/// f32 rounding into a large relative error; typical errors are 1e-7 … 1e-6.
+fn worst_tensor_error(layout: &ParamLayout, got: &[f32], want: &[f64]) -> (f64, String) {
+    let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
+    let all = norm(&mut want.iter().copied());
+    let mut worst = (0.0, String::new());
+    for t in layout.tensors() {
+        let diff = norm(&mut t.range().map(|i| f64::from(got[i]) - want[i]));
+        let reference = norm(&mut t.range().map(|i| want[i])).max(1e-2 * all);
+        let rel = diff / reference;
+        if std::env::var("FIELD_DEBUG").is_ok() {
+            eprintln!(
+                "{:>22}: rel {rel:.2e}  |ref| {reference:.3e}  |diff| {diff:.3e}",
+                t.name
+            );
+        }
+        if rel > worst.0 {
+            worst = (rel, t.name.clone());
+        }
+    }
+    worst
+}
+
+/// Scales the α head down by 10 so that occupancies stay away from 0 and 1. Saturated
+/// occupancies make `1 − o` cancel in f32 (as in PyTorch), and the f64 reference would then
+/// measure f32 conditioning rather than the gradient code.
+fn well_conditioned(mut field: OccupancyField) -> OccupancyField {
+    let layout = field.layout();
+    for name in ["out_alpha.weight", "out_alpha.bias"] {
+        let range = layout.get(name).expect("the occupancy layout has an α head").range();
+        for p in &mut field.params_mut()[range] {
+            *p *= 0.1;
+        }
+    }
+    field
+}
+
+/// Builds a batch of fields with the given hidden widths and random rays.
+fn setup(
+    seed: u64,
+    hidden: &[usize],
+    rays: usize,
+    samples_per_ray: usize,
+    backend: Backend,
+) -> (FieldBatch, SampleBatch) {
+    let mut batch = FieldBatch::with_backend(AdamWConfig::default(), backend);
+    let mut samples = SampleBatch::default();
+    for (i, &h) in hidden.iter().enumerate() {
+        let mut rng = seeded_rng(seed, RngStream::Object(ObjectId(i as u32)));
+        let scale = if h >= 128 { 5.0 } else { 2.0 };
+        batch.push(well_conditioned(OccupancyField::new(h, scale, &mut rng)));
+        samples.fields.push(random_rays(&mut rng, rays, samples_per_ray));
+    }
+    (batch, samples)
+}
+
+fn check_against_candle(seed: u64, hidden: &[usize], rays: usize, samples_per_ray: usize, backend: Backend) {
+    let (mut batch, samples) = setup(seed, hidden, rays, samples_per_ray, backend);
+    let (losses, grads) = batch.loss_and_gradients(&samples).expect("shapes agree");
+    for (f, field) in batch.fields().iter().enumerate() {
+        let reference = occupancy_reference(
+            field.hidden(),
+            field.scale(),
+            field.params(),
+            &samples.fields[f],
+            DType::F64,
+        )
+        .expect("candle runs");
+        let l = losses[f];
+        let close = |a: f32, b: f64| (f64::from(a) - b).abs() <= 1e-4 * b.abs().max(1e-2);
+        assert!(
+            close(l.total, reference.total),
+            "field {f}: total loss {} vs candle {}",
+            l.total,
+            reference.total
+        );
+        assert!(
+            close(l.depth, reference.depth) && close(l.colour, reference.colour) && close(l.opacity, reference.opacity),
+            "field {f}: loss terms {l:?} vs {reference:?}"
+        );
+        let (rel, name) = worst_tensor_error(&field.layout(), &grads[f], &reference.grad);
+        assert!(
+            rel <= 1e-4,
+            "{backend:?} H = {}: gradient of {name} off by {rel:.2e} (norm-relative)",
+            field.hidden()
+        );
+    }
+}
+
+#[test]
+fn object_field_gradients_match_candle_autograd() {
+    check_against_candle(1, &[32, 32, 32], 24, 10, Backend::detect());
+}
+
+#[test]
+fn background_field_gradients_match_candle_autograd() {
+    check_against_candle(2, &[128], 18, 14, Backend::detect());
+}
+
+#[test]
+fn mixed_widths_and_odd_sizes_match_candle_autograd() {
+    // H = 16 and 48 (not multiples of 32), 7 samples per ray, rays not filling whole chunks.
+    check_against_candle(3, &[16, 48, 32], 37, 7, Backend::detect());
+}
+
+#[test]
+fn every_simd_backend_matches_candle_autograd() {
+    for backend in Backend::all_available() {
+        check_against_candle(4, &[32, 128], 13, 10, backend);
+    }
+}
+
+#[test]
+fn forward_renders_match_candle() {
+    let (batch, samples) = setup(5, &[32], 40, 10, Backend::detect());
+    let field = &batch.fields()[0];
+    let renders = field.render_rays(&samples.fields[0]).expect("valid rays");
+    let reference = occupancy_reference(32, 2.0, field.params(), &samples.fields[0], DType::F64).expect("candle runs");
+    for (r, got) in renders.iter().enumerate() {
+        let close = |a: f32, b: f64| (f64::from(a) - b).abs() < 1e-5 * b.abs().max(1.0);
+        assert!(
+            close(got.depth, reference.rendered_depth[r]),
+            "ray {r} depth {} vs {}",
+            got.depth,
+            reference.rendered_depth[r]
+        );
+        assert!(close(got.opacity, reference.rendered_opacity[r]), "ray {r} opacity");
+        for c in 0..3 {
+            assert!(
+                close(got.colour[c], reference.rendered_colour[r][c]),
+                "ray {r} colour {c}"
+            );
+        }
+    }
+}
+
+#[test]
+fn one_adamw_step_matches_the_hand_computed_update() {
+    let (mut batch, samples) = setup(6, &[32, 128], 12, 10, Backend::detect());
+    let (_, grads) = batch.loss_and_gradients(&samples).expect("shapes agree");
+    let before: Vec<Vec<f32>> = batch.fields().iter().map(|f| f.params().to_vec()).collect();
+    batch.train_step(&samples).expect("shapes agree");
+    let cfg = AdamWConfig::default();
+    for (f, field) in batch.fields().iter().enumerate() {
+        for ((p1, p0), g) in field.params().iter().zip(&before[f]).zip(&grads[f]) {
+            // First AdamW step: m̂ = g, v̂ = g², so p ← p·(1 − lr·wd) − lr·g / (|g| + ε).
+            let (p0, g) = (f64::from(*p0), f64::from(*g));
+            let want = p0 * (1.0 - f64::from(cfg.lr * cfg.weight_decay))
+                - f64::from(cfg.lr) * g / (g.abs() + f64::from(cfg.eps));
+            assert!(
+                (f64::from(*p1) - want).abs() < 2e-7 * (1.0 + p0.abs()),
+                "field {f}: {p1} vs {want}"
+            );
+        }
+        assert_eq!(field.optimiser_state().step, 1, "each field counts its own steps");
+    }
+}
+
+#[test]
+fn adding_a_field_keeps_the_others_optimiser_state() {
+    let (mut batch, mut samples) = setup(7, &[32], 8, 10, Backend::detect());
+    batch.train_step(&samples).expect("shapes agree");
+    let moments = batch.fields()[0].optimiser_state().clone();
+    let mut rng = seeded_rng(7, RngStream::Object(ObjectId(99)));
+    batch.push(OccupancyField::new(32, 2.0, &mut rng));
+    samples.fields.push(random_rays(&mut rng, 8, 10));
+    assert_eq!(
+        batch.fields()[0].optimiser_state(),
+        &moments,
+        "pushing a field leaves field 0 untouched"
+    );
+    batch.train_step(&samples).expect("shapes agree");
+    assert_eq!(batch.fields()[0].optimiser_state().step, 2);
+    assert_eq!(batch.fields()[1].optimiser_state().step, 1);
+}
+
+#[test]
+fn results_are_bit_identical_for_any_thread_count() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| {
+            let (mut batch, samples) = setup(8, &[32, 32, 128], 30, 10, Backend::detect());
+            for _ in 0..3 {
+                batch.train_step(&samples).expect("shapes agree");
+            }
+            batch.fields().iter().map(|f| f.params().to_vec()).collect::<Vec<_>>()
+        })
+    };
+    assert_eq!(run(1), run(2), "1 and 2 threads give the same parameters");
+    assert_eq!(run(2), run(3), "2 and 3 threads give the same parameters");
+}
+
+#[test]
+fn plain_mlp_gradients_match_candle_autograd() {
+    let dims = [39, 32, 32, 32, 4];
+    for (count, points) in [(1, 50), (3, 200), (2, 1200)] {
+        let mut rng = seeded_rng(9, RngStream::Mapper);
+        let mut mlps = MlpBatch::new(&dims, count, AdamWConfig::adam(1e-3), &mut rng).expect("valid widths");
+        let inputs: Vec<Vec<f32>> = (0..count)
+            .map(|_| (0..points * 39).map(|_| rng.random_range(-1.0..1.0)).collect())
+            .collect();
+        let targets: Vec<Vec<f32>> = (0..count)
+            .map(|_| (0..points * 4).map(|_| rng.random_range(-1.0..1.0)).collect())
+            .collect();
+        let xs: Vec<&[f32]> = inputs.iter().map(Vec::as_slice).collect();
+        let ts: Vec<&[f32]> = targets.iter().map(Vec::as_slice).collect();
+        let (losses, grads) = mlps.loss_and_gradients(&xs, &ts).expect("shapes agree");
+        for b in 0..count {
+            let params = mlps.params(b).expect("exists");
+            let (loss, grad) = mlp_reference(&dims, params, &inputs[b], &targets[b], DType::F64).expect("candle runs");
+            assert!(
+                (f64::from(losses[b]) - loss).abs() < 1e-5 * loss.abs(),
+                "loss {} vs {loss}",
+                losses[b]
+            );
+            let (rel, name) = worst_tensor_error(mlps.layout(), &grads[b], &grad);
+            assert!(
+                rel <= 1e-4,
+                "B = {count}, N = {points}: gradient of {name} off by {rel:.2e}"
+            );
+        }
+    }
+}
