@@ -15,7 +15,14 @@ pub enum RngStream {
     Background,
     /// One object.
     Object(ObjectId),
+    /// The background's field: initial weights and training samples.
+    BackgroundField,
+    /// One object's field: initial weights and training samples.
+    ObjectField(ObjectId),
 }
+
+/// Field streams start here, above every object stream.
+const FIELD_STREAMS: u64 = 1 << 40;
 
 /// The generator of `stream` for a run seeded with `seed`.
 pub fn seeded_rng(seed: u64, stream: RngStream) -> ChaCha8Rng {
@@ -24,6 +31,8 @@ pub fn seeded_rng(seed: u64, stream: RngStream) -> ChaCha8Rng {
         RngStream::Mapper => 0,
         RngStream::Background => 1,
         RngStream::Object(ObjectId(id)) => 2 + u64::from(id),
+        RngStream::BackgroundField => FIELD_STREAMS + 1,
+        RngStream::ObjectField(ObjectId(id)) => FIELD_STREAMS + 2 + u64::from(id),
     });
     rng
 }

@@ -37,6 +37,7 @@ impl Pipeline {
     fn default_config() -> MapperConfig {
         MapperConfig {
             seed: SEED,
+            fields: catmap::config::FieldConfig::disabled(),
             ..MapperConfig::default()
         }
     }

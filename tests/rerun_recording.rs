@@ -1,5 +1,5 @@
 //! The recording a run writes decodes with Rerun's own decoder and holds the camera, its images
-//! and every object's cloud and box (issue 2).
+//! and every object's cloud, box, field loss and mesh.
 
 use std::collections::BTreeSet;
 
@@ -32,11 +32,15 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         let rec = rerun::RecordingStreamBuilder::new("catmap_test")
             .save(&rrd)
             .expect("open the recording file");
-        let mut mapper = Mapper::new(MapperConfig {
+        let mut config = MapperConfig {
             seed: 5,
             ..MapperConfig::default()
-        })
-        .expect("config");
+        };
+        // Cheap training: enough to log losses and a preview mesh or two.
+        config.fields.steps_per_frame = 1;
+        config.meshes.preview_every_frames = 10;
+        config.meshes.preview_voxel_m = 0.05;
+        let mut mapper = Mapper::new(config).expect("config");
         mapper.set_recording(rec);
         for position in 0..scene.len() {
             mapper.push(scene.read_frame(position).expect("frame")).expect("push");
@@ -68,4 +72,16 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         .count();
     assert!(objects_with_points >= 3, "object clouds are logged: {paths:?}");
     assert!(objects_with_boxes >= 3, "object boxes are logged: {paths:?}");
+    let with_suffix = |suffix: &str| {
+        paths
+            .iter()
+            .filter(|p| p.starts_with("world/objects/") && p.ends_with(suffix))
+            .count()
+    };
+    assert!(with_suffix("/loss") >= 3, "field losses are logged: {paths:?}");
+    assert!(with_suffix("/mesh") >= 3, "preview meshes are logged: {paths:?}");
+    assert!(
+        paths.contains("world/background/loss"),
+        "the background's loss is logged"
+    );
 }

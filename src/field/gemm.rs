@@ -288,7 +288,7 @@ impl<S: Simd> Block<'_, S> {
 #[inline(always)]
 fn load_b<S: Simd, const NR: usize>(b: &[f32], off: usize, panel_stride: usize) -> [S::f32s; NR] {
     let per_panel = PANEL / S::F32_LANES;
-    let mut out: [S::f32s; NR] = pulp::bytemuck::Zeroable::zeroed();
+    let mut out: [S::f32s; NR] = [pulp::bytemuck::Zeroable::zeroed(); NR];
     for p in 0..NR / per_panel {
         let (v, _) = S::as_simd_f32s(&b[off + p * panel_stride..][..PANEL]);
         out[p * per_panel..(p + 1) * per_panel].copy_from_slice(&v[..per_panel]);
@@ -300,7 +300,7 @@ fn load_b<S: Simd, const NR: usize>(b: &[f32], off: usize, panel_stride: usize) 
 #[inline(always)]
 pub(crate) fn load<S: Simd, const NR: usize>(s: &[f32]) -> [S::f32s; NR] {
     let (v, _) = S::as_simd_f32s(&s[..NR * S::F32_LANES]);
-    let mut out: [S::f32s; NR] = pulp::bytemuck::Zeroable::zeroed();
+    let mut out: [S::f32s; NR] = [pulp::bytemuck::Zeroable::zeroed(); NR];
     out.copy_from_slice(&v[..NR]);
     out
 }

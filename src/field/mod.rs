@@ -18,6 +18,7 @@
 //! | `gemm`, `simd`, `dense` | SIMD GEMM micro-kernels and packed linear layers |
 //! | `occupancy` | the occupancy MLP on a chunk (fused forward + backward) |
 //! | `object_field`, `batch`, `tasks`, `samples` | fields, the batched step, its parallel plan |
+//! | `ray_sampler` | the depth-guided sampler: keyframes, pixels, depths along rays |
 //! | `mlp` | a plain MLP batch on the same machinery (benchmark shape) |
 
 mod adamw;
@@ -31,6 +32,7 @@ mod loss;
 mod mlp;
 mod object_field;
 mod occupancy;
+mod ray_sampler;
 pub mod reference;
 mod render;
 mod samples;
@@ -46,6 +48,7 @@ pub use loss::{COLOUR_WEIGHT, DEPTH_STD_EPS, FieldLosses, OPACITY_WEIGHT};
 pub use mlp::MlpBatch;
 pub use object_field::{BACKGROUND_HIDDEN, FieldEval, OBJECT_HIDDEN, OccupancyField};
 pub use occupancy::ALPHA_SCALE;
+pub use ray_sampler::{RaySamplerConfig, choose_step_views, sample_training_rays};
 pub use render::{FREE_EPS, RayRender, RenderGrad, render_ray, render_ray_backward, sigmoid};
 pub use samples::{RaySamples, SampleBatch};
 pub use simd::Backend;

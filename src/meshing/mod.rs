@@ -22,10 +22,14 @@
 //! ```
 
 pub mod case_table;
-pub mod marching_cubes;
+mod field_mesh;
+mod map_meshes;
+mod marching_cubes;
 pub mod object_grid;
 pub mod sample_grid;
 
+pub use field_mesh::mesh_occupancy_field;
+pub use map_meshes::MapMeshes;
 pub use marching_cubes::{IsoSurfaceExtractor, marching_cubes};
 pub use object_grid::{ObjectFrame, ObjectGrid, ObjectMeshConfig, extract_object_mesh, paint_vertices};
 pub use sample_grid::SampleGrid;

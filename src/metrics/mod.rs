@@ -19,7 +19,9 @@ pub mod object_scores;
 pub mod report;
 
 pub use crop::Crop;
-pub use eval_dirs::{GroundTruthEntry, evaluate_dirs, evaluate_dirs_with, list_ground_truth, prediction_path};
+pub use eval_dirs::{
+    GroundTruthEntry, evaluate_dirs, evaluate_dirs_with, list_ground_truth, mesh_file_name, prediction_path,
+};
 pub use markdown::render_markdown;
 pub use object_scores::{ObjectScores, PredictionStatus, SAMPLES_PER_MESH, score_object};
 pub use report::{EvalSettings, EvaluationReport, MetricSummary, ObjectMetrics};

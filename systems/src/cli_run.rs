@@ -50,6 +50,24 @@ pub struct RunArgs {
     /// Stream to a running Rerun viewer (default address: rerun+http://127.0.0.1:9876/proxy).
     #[arg(long, num_args = 0..=1, default_missing_value = "rerun+http://127.0.0.1:9876/proxy")]
     pub rerun_connect: Option<String>,
+    /// Field model: per-object fields (vMAP*), or category-level fields.
+    #[arg(long, value_enum, default_value_t = MapMode::Instance)]
+    pub mode: MapMode,
+    /// Offline protocol: read every frame first, then train (`fields.offline_iterations` steps).
+    #[arg(long)]
+    pub offline: bool,
+    /// Training steps of the offline protocol (overrides `fields.offline_iterations`).
+    #[arg(long)]
+    pub iterations: Option<usize>,
+}
+
+/// Field models.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MapMode {
+    /// One occupancy field per object (the paper's vMAP* baseline).
+    Instance,
+    /// Category-level fields shared by objects of one shape (not available yet).
+    Category,
 }
 
 /// Dataset layouts.
@@ -74,15 +92,30 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     if let Some(max_frames) = args.max_frames {
         config.stream.max_frames = Some(max_frames);
     }
+    anyhow::ensure!(
+        args.mode == MapMode::Instance,
+        "--mode category is not available yet (category-level fields are being built); use --mode instance"
+    );
+    config.fields.offline |= args.offline;
+    if let Some(iterations) = args.iterations {
+        config.fields.offline_iterations = iterations;
+    }
+    if args.format == DatasetFormat::Scannet {
+        config.fields = config
+            .fields
+            .with_default_scales(catmap::config::FieldConfig::SCANNET_SCALES);
+    }
     config.validate().context("invalid settings")?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
 
-    let source = open_dataset(args, &config)?;
+    let (dataset_dir, source) = open_dataset(args, &config)?;
     let positions = stream_positions(source.len(), config.stream.stride, config.stream.max_frames);
     anyhow::ensure!(!positions.is_empty(), "{} has no frames to map", source.name());
     tracing::info!(dataset = %source.name(), frames = positions.len(), "mapping");
 
     let stream = FrameStream::spawn(Arc::clone(&source), positions.clone(), config.stream.channel_capacity);
+    let fields = config.fields.clone();
+    let seed = config.seed;
     let mut mapper = Mapper::with_inbox(config, stream.receiver.clone())?;
     let recording = open_recording(args)?;
     mapper.set_recording(recording);
@@ -91,6 +124,24 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     mapper.run_to_end(|frames| progress.set_position(frames));
     progress.finish_and_clear();
     stream.join();
+    if fields.enabled && fields.offline {
+        let iterations = fields.offline_iterations as u64;
+        let progress = bar(iterations, "training");
+        mapper.train_offline(iterations, 50, |done| progress.set_position(done));
+        progress.finish_and_clear();
+    }
+    let mut extra_seconds = std::collections::BTreeMap::new();
+    if fields.enabled {
+        let meshes = mapper.extract_final_meshes();
+        let dir = args.out.join("meshes");
+        let written = meshes.write_dir(&dir)?;
+        tracing::info!(files = written, dir = %dir.display(), "meshes written");
+        if dataset_dir.join("gt_meshes").is_dir() {
+            let started = Instant::now();
+            evaluate_run(&dir, &dataset_dir, seed, &args.out.join("metrics.json"))?;
+            extra_seconds.insert("eval".to_owned(), started.elapsed().as_secs_f64());
+        }
+    }
 
     let mut stage_seconds: std::collections::BTreeMap<String, f64> = mapper
         .stage_seconds()
@@ -100,8 +151,17 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     if let Some(stats) = mapper.stream_stats() {
         stage_seconds.insert("read (reader thread)".to_owned(), stats.decode_time.as_secs_f64());
     }
+    stage_seconds.extend(extra_seconds);
+    let training_steps = mapper.training_steps();
     let map = mapper.finish();
-    let summary = RunSummary::new(source.name(), &map, stage_seconds, started.elapsed().as_secs_f64());
+    let mut summary = RunSummary::new(source.name(), &map, stage_seconds, started.elapsed().as_secs_f64());
+    summary.mode = format!(
+        "{:?}{}",
+        args.mode,
+        if fields.offline { " (offline)" } else { " (online)" }
+    )
+    .to_lowercase();
+    summary.training_steps = training_steps;
     let summary_path = args.out.join("summary.json");
     summary.write_json(&summary_path)?;
     crate::print_stdout(&summary.table());
@@ -109,7 +169,20 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn open_dataset(args: &RunArgs, config: &catmap::MapperConfig) -> anyhow::Result<Arc<dyn FrameSource>> {
+/// Scores the written meshes against the dataset's ground truth: `metrics.json` and a table.
+fn evaluate_run(meshes: &Path, dataset: &Path, seed: u64, json: &Path) -> anyhow::Result<()> {
+    let report = catmap::metrics::evaluate_dirs(meshes, dataset, catmap::metrics::Crop::Paper, seed)
+        .with_context(|| format!("cannot evaluate {} against {}", meshes.display(), dataset.display()))?;
+    let mut text = serde_json::to_string_pretty(&report).context("cannot serialise the metrics")?;
+    text.push('\n');
+    catmap::atomic_file::write_atomic(json, text.as_bytes())
+        .with_context(|| format!("cannot write {}", json.display()))?;
+    crate::print_stdout(&catmap::metrics::render_markdown(&report));
+    tracing::info!(metrics = %json.display(), "evaluation written");
+    Ok(())
+}
+
+fn open_dataset(args: &RunArgs, config: &catmap::MapperConfig) -> anyhow::Result<(PathBuf, Arc<dyn FrameSource>)> {
     let camera = args
         .camera
         .as_deref()
@@ -142,7 +215,7 @@ fn open_dataset(args: &RunArgs, config: &catmap::MapperConfig) -> anyhow::Result
             Arc::new(ScanNetSequence::open(&dir, &options)?)
         }
     };
-    Ok(source)
+    Ok((dir, source))
 }
 
 fn open_recording(args: &RunArgs) -> anyhow::Result<rerun::RecordingStream> {

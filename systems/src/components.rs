@@ -84,3 +84,38 @@ pub struct Category {
     /// Its objects, sorted.
     pub members: Vec<ObjectId>,
 }
+
+/// Where an entity's field lives in [`crate::resources::Fields`]: its index in the object batch
+/// (the background has its own batch, index 0) and the world point its coordinates start at
+/// (the object's box centre when the field was created; the world origin for the background).
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct FieldSlot {
+    /// Index in the batch.
+    pub index: usize,
+    /// Field coordinates are world coordinates minus this point.
+    pub origin: nalgebra::Point3<f32>,
+}
+
+/// The random generator of an entity's field (initial weights, then training samples).
+#[derive(Component, Debug, Clone)]
+pub struct FieldRng(pub ChaCha8Rng);
+
+/// The field's losses at its latest training step.
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct FieldLoss {
+    /// Losses of the latest step (before its update).
+    pub latest: catmap::field::FieldLosses,
+    /// Steps this field has taken.
+    pub steps: u64,
+}
+
+/// The latest mesh extracted from the entity's field (world coordinates).
+#[derive(Component, Debug, Clone, PartialEq)]
+pub struct FieldMesh {
+    /// The mesh.
+    pub mesh: catmap::mesh::TriangleMesh,
+    /// Training steps the field had taken when it was meshed.
+    pub at_step: u64,
+    /// Final resolution (`meshes.object`) rather than a preview.
+    pub is_final: bool,
+}

@@ -11,11 +11,13 @@ pub mod components;
 pub mod ingest;
 pub mod log_rerun;
 pub mod mapper;
+pub mod meshes;
 pub mod resources;
 pub mod schedule;
 pub mod segment;
 pub mod snapshot;
 pub mod track;
+pub mod train;
 
 pub use mapper::{Mapper, MapperError};
 pub use snapshot::MapSnapshot;

@@ -5,7 +5,10 @@
 //! - `world/camera` — camera pose; `world/camera/image` — pinhole; `…/image/rgb` (JPEG),
 //!   `…/image/depth` (u16 mm), `…/image/instances` (segmentation, labelled per object);
 //! - `world/objects/{id}/points` — observed cloud, coloured by class;
-//!   `world/objects/{id}/box` — minimum-volume oriented box, labelled with class and id.
+//!   `world/objects/{id}/box` — minimum-volume oriented box, labelled with class and id;
+//!   `world/objects/{id}/mesh` — the field's mesh (previews, then final), vertex-coloured;
+//!   `world/objects/{id}/loss` — the field's training loss (scalar, once per tick);
+//! - `world/background/mesh`, `world/background/loss` — the same for the background field.
 
 use std::collections::BTreeMap;
 
@@ -15,7 +18,7 @@ use catmap::image_ops::{downscale_nearest, downscale_rgb};
 use catmap::{ClassId, InstanceLabel, ObjectId, RgbdFrame};
 use image::ImageEncoder;
 
-use crate::components::{CameraFrame, Object, ObjectBounds, ObjectClass, ObjectCloud};
+use crate::components::{CameraFrame, FieldLoss, FieldMesh, Object, ObjectBounds, ObjectClass, ObjectCloud};
 use crate::resources::{Settings, StreamProgress};
 
 /// Fixed entity paths.
@@ -34,6 +37,9 @@ pub mod paths {
     pub const INSTANCES: &str = "world/camera/image/instances";
     /// The timeline.
     pub const TIMELINE: &str = "frame";
+
+    /// Root of the background's entities.
+    pub const BACKGROUND: &str = "world/background";
 
     /// Root of one object's entities.
     pub fn object(id: catmap::ObjectId) -> String {
@@ -199,6 +205,55 @@ pub fn log_object_boxes(
         .with_colors([rerun::Color::from_rgb(r, g, bl)])
         .with_labels([object_label(object.id, class.0)]);
         let path = format!("{}/box", paths::object(object.id));
+        warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
+    }
+}
+
+/// Logs each field's latest total loss (once per tick in which it trained).
+pub fn log_field_losses(
+    rerun: Res<Rerun>,
+    progress: Res<StreamProgress>,
+    owners: Query<(Option<&Object>, &FieldLoss), Changed<FieldLoss>>,
+) {
+    let Some(frame) = progress.last_frame else { return };
+    rerun.0.set_time_sequence(paths::TIMELINE, frame.0 as i64);
+    for (object, loss) in &owners {
+        if loss.steps == 0 {
+            continue;
+        }
+        let path = format!(
+            "{}/loss",
+            object.map_or_else(|| paths::BACKGROUND.to_owned(), |o| paths::object(o.id))
+        );
+        let scalar = rerun::Scalars::single(f64::from(loss.latest.total));
+        warn_on_error(rerun.0.log(path.as_str(), &scalar), &path);
+    }
+}
+
+/// Logs each newly extracted field mesh.
+pub fn log_field_meshes(
+    rerun: Res<Rerun>,
+    progress: Res<StreamProgress>,
+    owners: Query<(Option<&Object>, &FieldMesh), Changed<FieldMesh>>,
+) {
+    if let Some(frame) = progress.last_frame {
+        rerun.0.set_time_sequence(paths::TIMELINE, frame.0 as i64);
+    }
+    for (object, mesh) in &owners {
+        let path = format!(
+            "{}/mesh",
+            object.map_or_else(|| paths::BACKGROUND.to_owned(), |o| paths::object(o.id))
+        );
+        let m = &mesh.mesh;
+        if m.is_empty() {
+            warn_on_error(rerun.0.log(path.as_str(), &rerun::Clear::flat()), &path);
+            continue;
+        }
+        let mut archetype = rerun::Mesh3D::new(m.vertices.iter().map(|v| [v.x, v.y, v.z]))
+            .with_triangle_indices(m.triangles.iter().map(|t| rerun::TriangleIndices::from(*t)));
+        if let Some(colors) = &m.colors {
+            archetype = archetype.with_vertex_colors(colors.iter().map(|[r, g, b]| rerun::Color::from_rgb(*r, *g, *b)));
+        }
         warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
     }
 }

@@ -5,6 +5,7 @@ use std::time::Duration;
 
 use bevy_ecs::prelude::*;
 use catmap::keyframes::KeyframeWindow;
+use catmap::meshing::MapMeshes;
 use catmap::observed_cloud::ObservedCloud;
 use catmap::rng::{RngStream, seeded_rng};
 use catmap::stream::{StreamMessage, StreamStats};
@@ -13,8 +14,11 @@ use crossbeam_channel::{Receiver, Sender, TrySendError, bounded};
 
 use crate::components::{Background, Keyframes, ObjectCloud, ObjectRng, VisibleFrames};
 use crate::log_rerun::{Rerun, log_world_setup};
-use crate::resources::{CategoryIndex, FrameInbox, ObjectIndex, Settings, StageTimes, StreamProgress};
-use crate::schedule::build_schedule;
+use crate::meshes::collect_meshes;
+use crate::resources::{
+    CategoryIndex, Fields, FrameInbox, ObjectIndex, Settings, StageTimes, StreamProgress, TrainingQueue,
+};
+use crate::schedule::{build_final_mesh_schedule, build_schedule, build_training_schedule};
 use crate::snapshot::MapSnapshot;
 
 /// Errors of the mapper facade.
@@ -40,6 +44,8 @@ pub enum MapperError {
 pub struct Mapper {
     world: World,
     schedule: Schedule,
+    training: Schedule,
+    final_meshes: Schedule,
     /// Sending end for `push`; `None` when a reader thread feeds the inbox, or after `end_stream`.
     pusher: Option<Sender<StreamMessage>>,
 }
@@ -64,6 +70,8 @@ impl Mapper {
             ObjectCloud(ObservedCloud::new(config.objects.background_voxel_m)),
             ObjectRng(seeded_rng(config.seed, RngStream::Background)),
         ));
+        world.insert_resource(Fields::new(config.fields.optimiser()));
+        world.init_resource::<TrainingQueue>();
         world.insert_resource(Settings(config));
         world.insert_resource(FrameInbox(inbox));
         world.init_resource::<StreamProgress>();
@@ -73,6 +81,8 @@ impl Mapper {
         Ok(Self {
             world,
             schedule: build_schedule(),
+            training: build_training_schedule(),
+            final_meshes: build_final_mesh_schedule(),
             pusher: None,
         })
     }
@@ -150,6 +160,35 @@ impl Mapper {
             self.step();
             on_step(self.world.resource::<StreamProgress>().frames_ingested);
         }
+    }
+
+    /// The offline protocol's training (call after the stream has ended): `iterations` steps on
+    /// the keyframes gathered, run in chunks of `chunk` steps; `on_progress` gets the steps done.
+    pub fn train_offline(&mut self, iterations: u64, chunk: u64, mut on_progress: impl FnMut(u64)) {
+        let mut done = 0;
+        while done < iterations {
+            let n = chunk.max(1).min(iterations - done);
+            self.world.resource_mut::<TrainingQueue>().pending += n;
+            self.training.run(&mut self.world);
+            done += n;
+            on_progress(done);
+        }
+    }
+
+    /// Training steps run so far (object batch).
+    pub fn training_steps(&self) -> u64 {
+        self.world.resource::<TrainingQueue>().steps_done
+    }
+
+    /// Meshes every field at final resolution (logged to Rerun when recording) and returns them.
+    pub fn extract_final_meshes(&mut self) -> MapMeshes {
+        self.final_meshes.run(&mut self.world);
+        collect_meshes(&mut self.world)
+    }
+
+    /// The latest meshes (previews or final) of every field.
+    pub fn meshes(&mut self) -> MapMeshes {
+        collect_meshes(&mut self.world)
     }
 
     /// A read-only view of the map as it is now.

@@ -64,3 +64,37 @@ impl Drop for StageTimer<'_> {
         *self.times.0.entry(self.stage).or_default() += self.started.elapsed();
     }
 }
+
+/// Every field of the map: the objects' fields trained as one batch, and the background's.
+#[derive(Resource, Debug)]
+pub struct Fields {
+    /// Object fields (H = 32), in creation order.
+    pub objects: catmap::field::FieldBatch,
+    /// The entity owning each object field, by batch index.
+    pub object_owners: Vec<Entity>,
+    /// The background field (H = 128), once the background has keyframes.
+    pub background: catmap::field::FieldBatch,
+    /// The background entity, once its field exists.
+    pub background_owner: Option<Entity>,
+}
+
+impl Fields {
+    /// No fields yet; both batches use `optimiser`.
+    pub fn new(optimiser: catmap::field::AdamWConfig) -> Self {
+        Self {
+            objects: catmap::field::FieldBatch::new(optimiser),
+            object_owners: Vec::new(),
+            background: catmap::field::FieldBatch::new(optimiser),
+            background_owner: None,
+        }
+    }
+}
+
+/// Training steps waiting to run, and steps run so far.
+#[derive(Resource, Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct TrainingQueue {
+    /// Steps the training system will run at its next call.
+    pub pending: u64,
+    /// Object-batch steps run so far.
+    pub steps_done: u64,
+}

@@ -7,9 +7,14 @@ use crate::categorize::update_categories;
 use crate::cleanup::despawn_consumed_frames;
 use crate::clouds::{accumulate_clouds, refresh_object_bounds};
 use crate::ingest::ingest_frames;
-use crate::log_rerun::{Rerun, log_camera_frames, log_instance_legend, log_object_boxes, log_object_clouds};
+use crate::log_rerun::{
+    Rerun, log_camera_frames, log_field_losses, log_field_meshes, log_instance_legend, log_object_boxes,
+    log_object_clouds,
+};
+use crate::meshes::{extract_final_meshes, extract_preview_meshes};
 use crate::segment::observe_frames;
 use crate::track::{record_background_views, record_object_views, spawn_new_objects};
+use crate::train::{attach_fields, queue_online_steps, train_fields};
 
 /// The mapper's stages, in the order they run each tick.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -24,6 +29,10 @@ pub enum MapperSystems {
     Map,
     /// Category membership follows object classes.
     Categorize,
+    /// Fields appear for objects with a box; queued training steps run.
+    Train,
+    /// Preview meshes every few frames.
+    Mesh,
     /// Rerun logging (only when a `Rerun` resource exists).
     Log,
     /// Consumed frames are despawned.
@@ -46,6 +55,8 @@ pub fn build_schedule() -> Schedule {
             MapperSystems::Track,
             MapperSystems::Map,
             MapperSystems::Categorize,
+            MapperSystems::Train,
+            MapperSystems::Mesh,
             MapperSystems::Log,
             MapperSystems::Cleanup,
         )
@@ -62,15 +73,46 @@ pub fn build_schedule() -> Schedule {
             .chain()
             .in_set(MapperSystems::Map),
         update_categories.in_set(MapperSystems::Categorize),
+        (attach_fields, queue_online_steps, train_fields)
+            .chain()
+            .in_set(MapperSystems::Train),
+        extract_preview_meshes.in_set(MapperSystems::Mesh),
         (
             log_camera_frames,
             log_instance_legend,
             log_object_clouds,
             log_object_boxes,
+            log_field_losses,
+            log_field_meshes,
         )
             .chain()
             .in_set(MapperSystems::Log),
         despawn_consumed_frames.in_set(MapperSystems::Cleanup),
+    ));
+    schedule
+}
+
+/// The schedule of offline training: fields for objects that lack one, the queued steps, and
+/// loss logging.
+pub fn build_training_schedule() -> Schedule {
+    let mut schedule = Schedule::default();
+    schedule.set_executor(SingleThreadedExecutor::new());
+    schedule.add_systems((
+        (attach_fields, train_fields).chain(),
+        log_field_losses.after(train_fields).run_if(resource_exists::<Rerun>),
+    ));
+    schedule
+}
+
+/// The schedule that meshes every field at final resolution and logs the meshes.
+pub fn build_final_mesh_schedule() -> Schedule {
+    let mut schedule = Schedule::default();
+    schedule.set_executor(SingleThreadedExecutor::new());
+    schedule.add_systems((
+        extract_final_meshes,
+        log_field_meshes
+            .after(extract_final_meshes)
+            .run_if(resource_exists::<Rerun>),
     ));
     schedule
 }

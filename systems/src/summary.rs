@@ -32,6 +32,10 @@ pub struct ObjectRow {
 pub struct RunSummary {
     /// Where the frames came from.
     pub dataset: String,
+    /// Field model and protocol, e.g. "instance (offline)".
+    pub mode: String,
+    /// Training steps run (object batch).
+    pub training_steps: u64,
     /// Frames mapped.
     pub frames: u64,
     /// Frames the reader skipped.
@@ -73,6 +77,8 @@ impl RunSummary {
         }
         Self {
             dataset,
+            mode: String::new(),
+            training_steps: 0,
             frames: map.frames_ingested,
             frames_skipped: map.frames_skipped,
             objects_per_class,
@@ -97,6 +103,9 @@ impl RunSummary {
             "{} frames ({} skipped) from {}",
             self.frames, self.frames_skipped, self.dataset
         );
+        if !self.mode.is_empty() {
+            let _ = writeln!(out, "mode: {}, {} training steps", self.mode, self.training_steps);
+        }
         let _ = writeln!(out, "\n| class | objects |\n|---|---:|");
         for (class, n) in &self.objects_per_class {
             let _ = writeln!(out, "| {class} | {n} |");

@@ -3,6 +3,12 @@
 
 use serde::{Deserialize, Serialize};
 
+mod fields;
+mod meshes;
+
+pub use fields::FieldConfig;
+pub use meshes::MeshConfig;
+
 use crate::error::{CatmapError, Result};
 
 /// Everything the mapper can be told. `catmap config` prints the defaults as TOML.
@@ -19,6 +25,10 @@ pub struct MapperConfig {
     pub objects: ObjectConfig,
     /// Per-object keyframe windows.
     pub keyframes: KeyframeConfig,
+    /// Per-object fields and their training.
+    pub fields: FieldConfig,
+    /// Mesh extraction.
+    pub meshes: MeshConfig,
     /// Live visualisation.
     pub rerun: RerunConfig,
 }
@@ -194,6 +204,36 @@ impl MapperConfig {
             && self.objects.background_voxel_m > 0.0)
         {
             return bad("voxel sizes must be positive");
+        }
+        let f = &self.fields;
+        if !(f.learning_rate > 0.0 && f.learning_rate.is_finite() && f.weight_decay >= 0.0) {
+            return bad("fields.learning_rate must be positive and fields.weight_decay non-negative");
+        }
+        if [f.object_scale, f.background_scale]
+            .iter()
+            .flatten()
+            .any(|s| !(*s > 0.0 && s.is_finite()))
+        {
+            return bad("fields.object_scale and fields.background_scale must be positive");
+        }
+        for (name, rays) in [("object_rays", &f.object_rays), ("background_rays", &f.background_rays)] {
+            if rays.keyframes_per_step == 0 || rays.pixels_per_keyframe == 0 || rays.samples_per_ray() == 0 {
+                return Err(CatmapError::Config(format!(
+                    "fields.{name}: keyframes, pixels and samples must be at least 1"
+                )));
+            }
+            if !(rays.surface_band_m > 0.0 && rays.behind_occluder_m >= 0.0) {
+                return Err(CatmapError::Config(format!(
+                    "fields.{name}: surface_band_m must be positive"
+                )));
+            }
+        }
+        let m = &self.meshes;
+        if !(m.object.voxel_size_m > 0.0 && m.preview_voxel_m > 0.0 && m.background_voxel_m > 0.0) {
+            return bad("meshes: voxel sizes must be positive");
+        }
+        if m.object.max_samples_per_side < 2 || !(m.object.box_fill > 0.0 && m.object.box_fill <= 1.0) {
+            return bad("meshes.object: max_samples_per_side must be >= 2 and box_fill in (0, 1]");
         }
         if self.rerun.image_downscale == 0 || self.rerun.image_every == 0 {
             return bad("rerun.image_downscale and rerun.image_every must be at least 1");

@@ -1,0 +1,129 @@
+//! Mesh stage: field meshes as previews every few frames, and at final resolution at the end.
+
+use bevy_ecs::prelude::*;
+use catmap::FrameIndex;
+use catmap::mesh::{Aabb, TriangleMesh};
+use catmap::meshing::{MapMeshes, ObjectFrame, ObjectMeshConfig, mesh_occupancy_field};
+use nalgebra::{Isometry3, Similarity3, Translation3};
+use rayon::prelude::*;
+
+use crate::components::{Background, FieldLoss, FieldMesh, FieldSlot, Object, ObjectBounds, ObjectCloud};
+use crate::resources::{Fields, Settings, StageTimes, StreamProgress};
+
+/// Fields that can be meshed: objects with a box, and the background with its cloud.
+type Meshable<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        Option<&'static Object>,
+        Has<Background>,
+        &'static FieldSlot,
+        &'static FieldLoss,
+        Option<&'static ObjectBounds>,
+        &'static ObjectCloud,
+    ),
+>;
+
+/// Every `preview_every_frames` ingested frames, meshes each trained object field at the preview
+/// spacing (for live viewing; the background is only meshed at the end).
+pub fn extract_preview_meshes(
+    settings: Res<Settings>,
+    progress: Res<StreamProgress>,
+    fields: Res<Fields>,
+    owners: Meshable,
+    mut last: Local<Option<FrameIndex>>,
+    mut times: ResMut<StageTimes>,
+    mut commands: Commands,
+) {
+    let every = settings.0.meshes.preview_every_frames;
+    let frames = progress.frames_ingested;
+    if every == 0 || frames == 0 || !frames.is_multiple_of(every) || *last == progress.last_frame {
+        return;
+    }
+    *last = progress.last_frame;
+    let _timer = times.start("meshes");
+    let config = settings.0.meshes.preview();
+    for (entity, mesh, at_step) in mesh_fields(&fields, &owners, &config, &config, false) {
+        commands.entity(entity).insert(FieldMesh {
+            mesh,
+            at_step,
+            is_final: false,
+        });
+    }
+}
+
+/// Meshes every field at final resolution (`meshes.object`; the background at
+/// `meshes.background_voxel_m` over its cloud's bounds).
+pub fn extract_final_meshes(
+    settings: Res<Settings>,
+    fields: Res<Fields>,
+    owners: Meshable,
+    mut times: ResMut<StageTimes>,
+    mut commands: Commands,
+) {
+    let _timer = times.start("meshes");
+    let cfg = &settings.0.meshes;
+    for (entity, mesh, at_step) in mesh_fields(&fields, &owners, &cfg.object, &cfg.background(), true) {
+        commands.entity(entity).insert(FieldMesh {
+            mesh,
+            at_step,
+            is_final: true,
+        });
+    }
+}
+
+/// Meshes of the fields of `owners` (objects in parallel); failures are logged and skipped.
+fn mesh_fields(
+    fields: &Fields,
+    owners: &Meshable,
+    object_config: &ObjectMeshConfig,
+    background_config: &ObjectMeshConfig,
+    with_background: bool,
+) -> Vec<(Entity, TriangleMesh, u64)> {
+    let mut work: Vec<_> = owners
+        .iter()
+        .filter(|(_, _, is_background, _, loss, ..)| loss.steps > 0 && (with_background || !is_background))
+        .collect();
+    work.sort_by_key(|(_, object, ..)| object.map(|o| o.id));
+    work.par_iter()
+        .filter_map(|&(entity, object, is_background, slot, loss, bounds, cloud)| {
+            let (field, frame, config) = if is_background {
+                let bounds = Aabb::from_points(cloud.0.points().iter())?;
+                let pose = Isometry3::from_parts(Translation3::from(bounds.center().coords), Default::default());
+                let frame = ObjectFrame {
+                    world_from_object: Similarity3::from_isometry(pose, 1.0),
+                    extents: bounds.extent(),
+                };
+                (fields.background.field(slot.index)?, frame, background_config)
+            } else {
+                let frame = ObjectFrame::from_oriented_box(&bounds?.oriented_box);
+                (fields.objects.field(slot.index)?, frame, object_config)
+            };
+            match mesh_occupancy_field(field, &slot.origin, &frame, config) {
+                Ok(mesh) => Some((entity, mesh, loss.steps)),
+                Err(e) => {
+                    let who = object.map_or_else(|| "background".to_owned(), |o| o.id.to_string());
+                    tracing::warn!(owner = %who, error = %e, "meshing failed");
+                    None
+                }
+            }
+        })
+        .collect()
+}
+
+/// The latest meshes of the map, by object id, and the background's.
+pub fn collect_meshes(world: &mut World) -> MapMeshes {
+    let mut meshes = MapMeshes::default();
+    let mut query = world.query::<(Option<&Object>, Has<Background>, &FieldMesh)>();
+    for (object, is_background, mesh) in query.iter(world) {
+        match (object, is_background) {
+            (Some(object), _) => {
+                meshes.objects.insert(object.id, mesh.mesh.clone());
+            }
+            (None, true) => meshes.background = Some(mesh.mesh.clone()),
+            (None, false) => {}
+        }
+    }
+    meshes
+}
