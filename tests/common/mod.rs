@@ -1,0 +1,39 @@
+//! Helpers shared by the reader tests: fixture image writers and error-text checks.
+#![allow(dead_code, reason = "each test crate uses a different subset")]
+
+use std::path::Path;
+
+use catmap::{CatmapError, RgbdFrame};
+use image::{ImageBuffer, Luma, Rgb};
+
+pub fn write_grey16(path: &Path, (w, h): (u32, u32), f: impl Fn(u32, u32) -> u16) {
+    std::fs::create_dir_all(path.parent().expect("file in a folder")).expect("mkdir");
+    ImageBuffer::<Luma<u16>, Vec<u16>>::from_fn(w, h, |u, v| Luma([f(u, v)]))
+        .save(path)
+        .expect("write png");
+}
+
+pub fn write_grey8(path: &Path, (w, h): (u32, u32), f: impl Fn(u32, u32) -> u8) {
+    std::fs::create_dir_all(path.parent().expect("file in a folder")).expect("mkdir");
+    ImageBuffer::<Luma<u8>, Vec<u8>>::from_fn(w, h, |u, v| Luma([f(u, v)]))
+        .save(path)
+        .expect("write png");
+}
+
+pub fn write_rgb(path: &Path, (w, h): (u32, u32), f: impl Fn(u32, u32) -> [u8; 3]) {
+    std::fs::create_dir_all(path.parent().expect("file in a folder")).expect("mkdir");
+    ImageBuffer::<Rgb<u8>, Vec<u8>>::from_fn(w, h, |u, v| Rgb(f(u, v)))
+        .save(path)
+        .expect("write image");
+}
+
+pub fn pixel(frame: &RgbdFrame, u: u32, v: u32) -> usize {
+    (v * frame.intrinsics.width + u) as usize
+}
+
+pub fn assert_mentions(err: &CatmapError, parts: &[&str]) {
+    let text = err.to_string();
+    for part in parts {
+        assert!(text.contains(part), "error should mention {part:?}: {text}");
+    }
+}
