@@ -1,0 +1,216 @@
+//! The fused training pass of the occupancy MLP on one chunk: forward, render, loss, backward.
+
+use super::super::dense::Rows;
+use super::super::encoding::{self, COL_DIMS, EMB_LD, GEO_DIMS};
+use super::super::gemm::{Init, Post, padded};
+use super::super::loss::{FieldLosses, LossNorm, ray_loss};
+use super::super::render::{RenderGrad, render_ray, render_ray_backward};
+use super::super::samples::RaySamples;
+use super::super::simd::Backend;
+use super::{ALPHA_SCALE, Heads, OccupancyNet, OccupancyScratch, encoding_rows};
+
+impl OccupancyNet {
+    /// One fused training pass over rays `rays_range` of `rays`: forward, render, loss and
+    /// backward. Returns this chunk's share of the losses; gradients are added to `grad`.
+    pub(crate) fn train_chunk(
+        &self,
+        backend: Backend,
+        params: &[f32],
+        packed: &[f32],
+        scale: f32,
+        rays: &RaySamples,
+        rays_range: std::ops::Range<usize>,
+        norm: &LossNorm,
+        s: &mut OccupancyScratch,
+        grad: &mut [f32],
+    ) -> FieldLosses {
+        let spr = rays.samples_per_ray;
+        let samples = rays_range.start * spr..rays_range.end * spr;
+        let n = samples.len();
+        let hp = self.hp();
+        self.forward(
+            backend,
+            params,
+            packed,
+            scale,
+            &rays.points[samples.clone()],
+            s,
+            Heads::All,
+        );
+        let z = &rays.z[samples];
+
+        // Render, loss and gradients with respect to the raw head outputs.
+        let mut losses = FieldLosses::default();
+        s.d_alpha[..n * 16].fill(0.0);
+        s.d_colour[..n * 16].fill(0.0);
+        for (i, ray) in rays_range.enumerate() {
+            let r = i * spr..(i + 1) * spr;
+            let render = render_ray(
+                &s.occ[r.clone()],
+                &s.rgb[r.clone()],
+                &z[r.clone()],
+                &mut s.weights[r.clone()],
+                &mut s.trans[r.clone()],
+            );
+            let (l, g): (FieldLosses, RenderGrad) =
+                ray_loss(&render, rays.depth_m[ray], rays.rgb[ray], rays.states[ray], norm);
+            losses = losses.add(l);
+            render_ray_backward(
+                &g,
+                &s.occ[r.clone()],
+                &s.rgb[r.clone()],
+                &z[r.clone()],
+                &s.weights[r.clone()],
+                &s.trans[r.clone()],
+                &mut s.d_occ[r.clone()],
+                &mut s.d_rgb[r.clone()],
+            );
+            for k in r {
+                let o = s.occ[k];
+                s.d_alpha[k * 16] = ALPHA_SCALE * s.d_occ[k] * o * (1.0 - o);
+                for c in 0..3 {
+                    let v = s.rgb[k][c];
+                    s.d_colour[k * 16 + c] = s.d_rgb[k][c] * v * (1.0 - v);
+                }
+            }
+        }
+
+        // Backward through the MLP, heads first.
+        let [l1, l2, l3, l4, la, l5, lc] = &self.layers;
+        let [h1, h2, h3, h4, h5] = &s.h;
+        let geo = Rows {
+            data: &s.emb,
+            ld: EMB_LD,
+        };
+        let col = Rows {
+            data: &s.emb[GEO_DIMS..],
+            ld: EMB_LD,
+        };
+        let (p, q) = (&mut s.p, &mut s.q);
+        let (gp, cp) = (padded(GEO_DIMS), padded(COL_DIMS));
+        let d_colour = Rows {
+            data: &s.d_colour,
+            ld: 16,
+        };
+        let d_alpha = Rows {
+            data: &s.d_alpha,
+            ld: 16,
+        };
+        // out_color: p = d(h5 pre-activation)
+        lc.backward_weights(backend, n, &[Rows::new(h5, hp)], d_colour, grad);
+        lc.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            d_colour,
+            p,
+            hp,
+            Init::Zero,
+            Post::Mask { data: h5, ld: hp },
+        );
+        // color_linear: q = dh4 (from colour), d_col
+        l5.backward_weights(backend, n, &[Rows::new(h4, hp), col], Rows::new(p, hp), grad);
+        l5.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(p, hp),
+            q,
+            hp,
+            Init::Zero,
+            Post::Identity,
+        );
+        l5.backward_input(
+            backend,
+            packed,
+            n,
+            1,
+            Rows::new(p, hp),
+            &mut s.d_col,
+            cp,
+            Init::Zero,
+            Post::Identity,
+        );
+        // out_alpha: q = d(h4 pre-activation)
+        la.backward_weights(backend, n, &[Rows::new(h4, hp)], d_alpha, grad);
+        la.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            d_alpha,
+            q,
+            hp,
+            Init::Accumulate,
+            Post::Mask { data: h4, ld: hp },
+        );
+        // mid2: p = d(h3 pre)
+        l4.backward_weights(backend, n, &[Rows::new(h3, hp)], Rows::new(q, hp), grad);
+        l4.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(q, hp),
+            p,
+            hp,
+            Init::Zero,
+            Post::Mask { data: h3, ld: hp },
+        );
+        // cat_layer: q = d(h2 pre), d_geo
+        l3.backward_weights(backend, n, &[Rows::new(h2, hp), geo], Rows::new(p, hp), grad);
+        l3.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(p, hp),
+            q,
+            hp,
+            Init::Zero,
+            Post::Mask { data: h2, ld: hp },
+        );
+        l3.backward_input(
+            backend,
+            packed,
+            n,
+            1,
+            Rows::new(p, hp),
+            &mut s.d_geo,
+            gp,
+            Init::Zero,
+            Post::Identity,
+        );
+        // mid1: p = d(h1 pre)
+        l2.backward_weights(backend, n, &[Rows::new(h1, hp)], Rows::new(q, hp), grad);
+        l2.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(q, hp),
+            p,
+            hp,
+            Init::Zero,
+            Post::Mask { data: h1, ld: hp },
+        );
+        // in_layer: d_geo += …
+        l1.backward_weights(backend, n, &[geo], Rows::new(p, hp), grad);
+        l1.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(p, hp),
+            &mut s.d_geo,
+            gp,
+            Init::Accumulate,
+            Post::Identity,
+        );
+        let gb = &mut grad[self.b_grad..self.b_grad + 3 * encoding_rows()];
+        encoding::backward_chunk(&s.emb, &s.dsin, &s.d_geo, gp, &s.d_col, cp, n, gb);
+        losses
+    }
+}
