@@ -246,19 +246,56 @@ const SUPPORT_DIRECTIONS: usize = 1000;
 /// Candidate box axes on the upper hemisphere.
 const CANDIDATE_AXES: usize = 256;
 
+/// Lanes of the blocked argmax in [`support_points`] (independent lanes vectorise).
+const LANES: usize = 8;
+
 /// The points that are extreme (maximal) along at least one of `directions`, deduplicated.
+///
+/// Projections are compared in `f32` (the support set only has to stand in for the hull; the
+/// chosen box is measured on every point in `f64`). Ties go to the later point.
 fn support_points(points: &[Vector3<f64>], directions: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+    let padded = points.len().div_ceil(LANES) * LANES;
+    // Structure of arrays, padded with copies of the last point: a padding slot can only win
+    // where the last point does, so clamping its index gives the last point.
+    let coord = |k: usize| -> Vec<f32> {
+        let mut c: Vec<f32> = points.iter().map(|p| p[k] as f32).collect();
+        c.resize(padded, c.last().copied().unwrap_or(0.0));
+        c
+    };
+    let (xs, ys, zs) = (coord(0), coord(1), coord(2));
     let mut chosen: Vec<usize> = directions
         .iter()
-        .map(|d| {
-            (0..points.len())
-                .max_by(|&a, &b| points[a].dot(d).total_cmp(&points[b].dot(d)))
-                .expect("the cloud is not empty")
-        })
+        .map(|d| argmax_projection(&xs, &ys, &zs, d.cast::<f32>()).min(points.len() - 1))
         .collect();
     chosen.sort_unstable();
     chosen.dedup();
     chosen.into_iter().map(|i| points[i]).collect()
+}
+
+/// Index of the largest `(x, y, z) · d` (the last one on ties); inputs are `LANES`-padded.
+fn argmax_projection(xs: &[f32], ys: &[f32], zs: &[f32], d: Vector3<f32>) -> usize {
+    let mut best = [f32::NEG_INFINITY; LANES];
+    let mut best_at = [0u32; LANES];
+    let blocks = xs
+        .chunks_exact(LANES)
+        .zip(ys.chunks_exact(LANES))
+        .zip(zs.chunks_exact(LANES));
+    for (b, ((x, y), z)) in blocks.enumerate() {
+        let base = (b * LANES) as u32;
+        for l in 0..LANES {
+            let dot = x[l] * d.x + y[l] * d.y + z[l] * d.z;
+            let better = dot >= best[l];
+            best[l] = if better { dot } else { best[l] };
+            best_at[l] = if better { base + l as u32 } else { best_at[l] };
+        }
+    }
+    let mut winner = 0;
+    for l in 1..LANES {
+        if best[l] > best[winner] || (best[l] == best[winner] && best_at[l] > best_at[winner]) {
+            winner = l;
+        }
+    }
+    best_at[winner] as usize
 }
 
 /// `n` nearly uniform unit vectors on the whole sphere.
