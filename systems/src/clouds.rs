@@ -1,7 +1,9 @@
 //! Cloud stage: observed point clouds grow with each frame, and oriented boxes follow them.
 
 use bevy_ecs::prelude::*;
+use catmap::ObjectId;
 use catmap::object_bounds::{box_is_stale, fit_object_box};
+use catmap::observed_cloud::ObservedCloud;
 use rayon::prelude::*;
 
 use crate::components::{Background, CameraFrame, FrameObservations, Object, ObjectBounds, ObjectCloud};
@@ -27,17 +29,18 @@ pub fn accumulate_clouds(
                     .map(|seen| (cloud, seen.pixels.as_slice()))
             })
             .collect();
+        if let Ok(cloud) = background.single_mut() {
+            work.push((cloud, &observations.0.background_pixels));
+        }
         work.par_iter_mut().for_each(|(cloud, pixels)| {
             cloud.0.add_pixels(&frame.0, pixels);
         });
-        if let Ok(mut cloud) = background.single_mut() {
-            cloud.0.add_pixels(&frame.0, &observations.0.background_pixels);
-        }
     }
 }
 
 /// Refits the oriented box of every object whose cloud has grown by more than
-/// `bounds_refresh_growth` since its last fit, and of every grown one when the stream ends.
+/// `bounds_refresh_growth` since its last fit, and of every grown one when the stream ends
+/// (stale objects are fitted in parallel; results are written back in query order).
 pub fn refresh_object_bounds(
     settings: Res<Settings>,
     progress: Res<StreamProgress>,
@@ -52,22 +55,30 @@ pub fn refresh_object_bounds(
     } else {
         cfg.bounds_refresh_growth
     };
-    for (entity, object, cloud, bounds) in &mut objects {
-        let fitted_at = bounds.as_ref().map(|b| b.fitted_at_points);
-        if !box_is_stale(fitted_at, cloud.0.len(), growth) {
-            continue;
-        }
-        let fitted = match fit_object_box(&cloud.0, cfg) {
-            Ok(oriented_box) => ObjectBounds {
+    let stale: Vec<(Entity, ObjectId, &ObservedCloud)> = objects
+        .iter()
+        .filter(|(_, _, cloud, bounds)| box_is_stale(bounds.map(|b| b.fitted_at_points), cloud.0.len(), growth))
+        .map(|(entity, object, cloud, _)| (entity, object.id, &cloud.0))
+        .collect();
+    let fits: Vec<(Entity, ObjectId, catmap::Result<ObjectBounds>)> = stale
+        .into_par_iter()
+        .map(|(entity, id, cloud)| {
+            let fitted = fit_object_box(cloud, cfg).map(|oriented_box| ObjectBounds {
                 oriented_box,
-                fitted_at_points: cloud.0.len(),
-            },
+                fitted_at_points: cloud.len(),
+            });
+            (entity, id, fitted)
+        })
+        .collect();
+    for (entity, id, fitted) in fits {
+        let fitted = match fitted {
+            Ok(fitted) => fitted,
             Err(e) => {
-                tracing::warn!(object = %object.id, error = %e, "cannot fit an oriented box yet");
+                tracing::warn!(object = %id, error = %e, "cannot fit an oriented box yet");
                 continue;
             }
         };
-        match bounds {
+        match objects.get_mut(entity).ok().and_then(|(_, _, _, bounds)| bounds) {
             Some(mut bounds) => *bounds = fitted,
             None => {
                 commands.entity(entity).insert(fitted);
