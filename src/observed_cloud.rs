@@ -11,11 +11,19 @@ use nalgebra::{Point3, Vector3};
 use crate::frame::RgbdFrame;
 
 /// Packs a voxel coordinate into one integer key (21 bits per axis, ±10 km at 1 cm).
+#[inline]
 fn voxel_key(p: &Point3<f32>, inv_voxel: f32) -> u64 {
     const OFFSET: i64 = 1 << 20;
     const MASK: i64 = (1 << 21) - 1;
-    let c = |x: f32| (((x * inv_voxel).floor() as i64 + OFFSET) & MASK) as u64;
+    let c = |x: f32| ((floor_to_i64(x * inv_voxel) + OFFSET) & MASK) as u64;
     (c(p.x) << 42) | (c(p.y) << 21) | c(p.z)
+}
+
+/// `x.floor() as i64` without a libm call (exact for finite `x` in the key's range).
+#[inline]
+fn floor_to_i64(x: f32) -> i64 {
+    let truncated = x as i64;
+    truncated - i64::from(x < truncated as f32)
 }
 
 /// A fast hasher for packed voxel keys (multiplicative, like FxHash). Deterministic.
@@ -70,24 +78,50 @@ impl ObservedCloud {
     #[inline]
     pub fn add_point(&mut self, p: &Point3<f32>) {
         let key = voxel_key(p, 1.0 / self.voxel_m);
+        self.add_to_voxel(key, p.coords.cast::<f64>(), 1);
+    }
+
+    #[inline]
+    fn add_to_voxel(&mut self, key: u64, sum: Vector3<f64>, count: u32) {
         let v = self.voxels.entry(key).or_insert(VoxelSum {
             sum: Vector3::zeros(),
             count: 0,
         });
-        v.sum += p.coords.cast::<f64>();
-        v.count += 1;
-        self.points_added += 1;
+        v.sum += sum;
+        v.count += count;
+        self.points_added += u64::from(count);
     }
 
     /// Back-projects the listed pixels of `frame` (invalid depth skipped) and adds them.
     /// Returns how many points were added.
+    ///
+    /// Neighbouring pixels mostly fall into the same voxel: runs of equal keys are summed first
+    /// and looked up in the grid once.
     pub fn add_pixels(&mut self, frame: &RgbdFrame, pixels: &[u32]) -> usize {
+        let inv_voxel = 1.0 / self.voxel_m;
+        let mut run: Option<(u64, Vector3<f64>, u32)> = None;
         let mut added = 0;
         for &i in pixels {
-            if let Some(p) = frame.point_in_world(i as usize) {
-                self.add_point(&p);
-                added += 1;
+            let Some(p) = frame.point_in_world(i as usize) else {
+                continue;
+            };
+            added += 1;
+            let key = voxel_key(&p, inv_voxel);
+            let coords = p.coords.cast::<f64>();
+            match &mut run {
+                Some((run_key, sum, count)) if *run_key == key => {
+                    *sum += coords;
+                    *count += 1;
+                }
+                _ => {
+                    if let Some((run_key, sum, count)) = run.replace((key, coords, 1)) {
+                        self.add_to_voxel(run_key, sum, count);
+                    }
+                }
             }
+        }
+        if let Some((run_key, sum, count)) = run {
+            self.add_to_voxel(run_key, sum, count);
         }
         added
     }
@@ -147,6 +181,53 @@ mod tests {
                 .iter()
                 .any(|p| (p - Point3::new(0.002, 0.003, 0.004)).norm() < 1e-6)
         );
+    }
+
+    #[test]
+    fn the_fast_floor_matches_floor() {
+        for x in [-2.5_f32, -2.0, -1.0, -0.5, -0.0, 0.0, 0.25, 1.0, 1.75, 1e6, -1e6 - 0.5] {
+            assert_eq!(floor_to_i64(x), x.floor() as i64, "floor of {x}");
+        }
+    }
+
+    #[test]
+    fn pixel_runs_give_the_same_cloud_as_single_points() {
+        use crate::frame::{CameraIntrinsics, InstanceMask};
+        use crate::ids::{ClassId, FrameIndex};
+        let (width, height) = (8, 4);
+        let frame = RgbdFrame {
+            index: FrameIndex(0),
+            world_from_camera: nalgebra::Isometry3::translation(0.1, -0.2, 0.3),
+            intrinsics: CameraIntrinsics {
+                width,
+                height,
+                fx: 50.0,
+                fy: 50.0,
+                cx: 3.5,
+                cy: 1.5,
+            },
+            rgb: vec![[0; 3]; 32],
+            depth_m: (0..32)
+                .map(|i| if i % 5 == 0 { 0.0 } else { 1.0 + 0.01 * i as f32 })
+                .collect(),
+            instances: InstanceMask::background(32),
+            classes: vec![ClassId(0); 32],
+        };
+        let pixels: Vec<u32> = (0..32).collect();
+        let mut by_pixels = ObservedCloud::new(0.01);
+        let added = by_pixels.add_pixels(&frame, &pixels);
+        let mut by_points = ObservedCloud::new(0.01);
+        for &i in &pixels {
+            if let Some(p) = frame.point_in_world(i as usize) {
+                by_points.add_point(&p);
+            }
+        }
+        assert_eq!(added, 25, "every fifth pixel has no depth");
+        assert_eq!(by_pixels.points_added(), by_points.points_added());
+        assert_eq!(by_pixels.len(), by_points.len(), "same voxels either way");
+        for (a, b) in by_pixels.points().iter().zip(by_points.points()) {
+            assert!((a - b).norm() < 1e-6, "same centroids either way");
+        }
     }
 
     #[test]
