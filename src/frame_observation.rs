@@ -44,8 +44,8 @@ pub fn observe_objects(frame: &RgbdFrame, cfg: &ObjectConfig) -> FrameObservatio
     let mut background_pixels = Vec::new();
     // Neighbouring pixels usually share a label: remember the last object's slot.
     let mut last_slot = usize::MAX;
-    for i in 0..frame.instances.len() {
-        let (u, v) = ((i % width as usize) as u32, (i / width as usize) as u32);
+    let pixels = (0..height).flat_map(|v| (0..width).map(move |u| (u, v)));
+    for (i, (u, v)) in pixels.enumerate().take(frame.instances.len()) {
         match frame.instances.label(i) {
             InstanceLabel::Object(id) => {
                 if found.get(last_slot).is_none_or(|(last_id, _)| *last_id != id) {

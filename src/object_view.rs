@@ -74,12 +74,10 @@ impl ObjectView {
         let (mut rgb, mut depth_m, mut states) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
         for v in region.v_min..=region.v_max {
             let row = (v * k.width) as usize;
-            for u in region.u_min..=region.u_max {
-                let i = row + u as usize;
-                rgb.push(frame.rgb[i]);
-                depth_m.push(frame.depth_m[i]);
-                states.push(owner.state_of(frame.instances.label(i)));
-            }
+            let (start, end) = (row + region.u_min as usize, row + region.u_max as usize + 1);
+            rgb.extend_from_slice(&frame.rgb[start..end]);
+            depth_m.extend_from_slice(&frame.depth_m[start..end]);
+            states.extend((start..end).map(|i| owner.state_of(frame.instances.label(i))));
         }
         Self {
             frame: frame.index,
