@@ -64,15 +64,12 @@ impl OrientedBox {
 /// Axes are canonical: box z is the axis closest to world z (pointing up), box x the longer of
 /// the two others with a non-negative world-x component. Errors on an empty or non-finite cloud.
 pub fn fit_minimum_volume_box(points: &[Point3<f32>]) -> Result<OrientedBox> {
+    let degenerate = |why: &str| Err(CatmapError::Degenerate(why.to_owned()));
     if points.is_empty() {
-        return Err(CatmapError::Degenerate(
-            "cannot fit a box to an empty point cloud".to_owned(),
-        ));
+        return degenerate("cannot fit a box to an empty point cloud");
     }
     if points.iter().any(|p| !p.coords.iter().all(|x| x.is_finite())) {
-        return Err(CatmapError::Degenerate(
-            "point cloud has a NaN or infinite coordinate".to_owned(),
-        ));
+        return degenerate("point cloud has a NaN or infinite coordinate");
     }
     let mean = points
         .iter()
@@ -194,12 +191,9 @@ pub fn convex_hull_2d(mut points: Vec<Vector2<f64>>) -> Vec<Vector2<f64>> {
     let mut hull: Vec<Vector2<f64>> = Vec::with_capacity(2 * points.len());
     for pass in 0..2 {
         let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &Vector2<f64>>> = if pass == 0 {
-            Box::new(points.iter())
-        } else {
-            Box::new(points.iter().rev())
-        };
-        for p in iter {
+        let (mut forward, mut backward) = (points.iter(), points.iter().rev());
+        let ordered: &mut dyn Iterator<Item = &Vector2<f64>> = if pass == 0 { &mut forward } else { &mut backward };
+        for p in ordered {
             while hull.len() >= start + 2 && cross(&hull[hull.len() - 2], &hull[hull.len() - 1], p) <= 0.0 {
                 hull.pop();
             }
@@ -250,52 +244,42 @@ const CANDIDATE_AXES: usize = 256;
 const LANES: usize = 8;
 
 /// The points that are extreme (maximal) along at least one of `directions`, deduplicated.
-///
-/// Projections are compared in `f32` (the support set only has to stand in for the hull; the
-/// chosen box is measured on every point in `f64`). Ties go to the later point.
+/// Projections are compared in `f32` on `LANES`-padded coordinate arrays (the support set only
+/// stands in for the hull; the chosen box is measured on every point in `f64`).
 fn support_points(points: &[Vector3<f64>], directions: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
     let padded = points.len().div_ceil(LANES) * LANES;
-    // Structure of arrays, padded with copies of the last point: a padding slot can only win
-    // where the last point does, so clamping its index gives the last point.
-    let coord = |k: usize| -> Vec<f32> {
-        let mut c: Vec<f32> = points.iter().map(|p| p[k] as f32).collect();
-        c.resize(padded, c.last().copied().unwrap_or(0.0));
-        c
-    };
-    let (xs, ys, zs) = (coord(0), coord(1), coord(2));
+    let mut xyz = [0, 1, 2].map(|k| points.iter().map(|p| p[k] as f32).collect::<Vec<f32>>());
+    // Padding repeats the last point, so a padding slot can only win where the last point does.
+    xyz.iter_mut()
+        .for_each(|c| c.resize(padded, c.last().copied().unwrap_or(0.0)));
+    let last = points.len() - 1;
     let mut chosen: Vec<usize> = directions
         .iter()
-        .map(|d| argmax_projection(&xs, &ys, &zs, d.cast::<f32>()).min(points.len() - 1))
+        .map(|d| argmax_projection(&xyz, d).min(last))
         .collect();
     chosen.sort_unstable();
     chosen.dedup();
     chosen.into_iter().map(|i| points[i]).collect()
 }
 
-/// Index of the largest `(x, y, z) · d` (the last one on ties); inputs are `LANES`-padded.
-fn argmax_projection(xs: &[f32], ys: &[f32], zs: &[f32], d: Vector3<f32>) -> usize {
-    let mut best = [f32::NEG_INFINITY; LANES];
-    let mut best_at = [0u32; LANES];
+/// Index of the largest `(x, y, z) · d` (the last one on ties).
+fn argmax_projection([xs, ys, zs]: &[Vec<f32>; 3], d: &Vector3<f64>) -> usize {
+    let d = d.cast::<f32>();
+    let (mut best, mut best_at) = ([f32::NEG_INFINITY; LANES], [0u32; LANES]);
     let blocks = xs
         .chunks_exact(LANES)
         .zip(ys.chunks_exact(LANES))
         .zip(zs.chunks_exact(LANES));
     for (b, ((x, y), z)) in blocks.enumerate() {
-        let base = (b * LANES) as u32;
         for l in 0..LANES {
             let dot = x[l] * d.x + y[l] * d.y + z[l] * d.z;
             let better = dot >= best[l];
             best[l] = if better { dot } else { best[l] };
-            best_at[l] = if better { base + l as u32 } else { best_at[l] };
+            best_at[l] = if better { (b * LANES + l) as u32 } else { best_at[l] };
         }
     }
-    let mut winner = 0;
-    for l in 1..LANES {
-        if best[l] > best[winner] || (best[l] == best[winner] && best_at[l] > best_at[winner]) {
-            winner = l;
-        }
-    }
-    best_at[winner] as usize
+    let winner = (0..LANES).max_by(|&a, &b| best[a].total_cmp(&best[b]).then(best_at[a].cmp(&best_at[b])));
+    best_at[winner.expect("LANES > 0")] as usize
 }
 
 /// `n` nearly uniform unit vectors on the whole sphere.
@@ -367,22 +351,16 @@ mod tests {
         let points = box_surface(&pose, half, 4000, 7);
         let fitted = fit_minimum_volume_box(&points).expect("non-empty cloud");
         let true_volume = 8.0 * half.x * half.y * half.z;
-        assert!(
-            fitted.volume() < true_volume * 1.03,
-            "volume {} vs true {}",
-            fitted.volume(),
-            true_volume
-        );
+        let volume = fitted.volume();
+        assert!(volume < true_volume * 1.03, "volume {volume} vs true {true_volume}");
         assert!((fitted.center() - pose.translation.vector).coords.norm() < 0.01);
         let mut got: Vec<f32> = fitted.half_extents.iter().copied().collect();
         got.sort_by(f32::total_cmp);
         for (g, t) in got.iter().zip([0.1, 0.25, 0.4]) {
             assert!((g - t).abs() < 0.01, "half extents {got:?}");
         }
-        assert!(
-            points.iter().all(|p| fitted.contains(p, 1e-4)),
-            "every point lies inside"
-        );
+        let all_inside = points.iter().all(|p| fitted.contains(p, 1e-4));
+        assert!(all_inside, "every point lies inside");
     }
 
     #[test]
