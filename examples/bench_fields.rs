@@ -143,32 +143,6 @@ fn bench_mlp(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Random rays of one field (points in a ±2 m box, sorted depths, mixed pixel states).
-fn random_rays(rng: &mut impl rand::Rng, rays: usize, samples_per_ray: usize) -> RaySamples {
-    let mut out = RaySamples {
-        samples_per_ray,
-        ..RaySamples::default()
-    };
-    for _ in 0..rays {
-        let origin: [f32; 3] = std::array::from_fn(|_| rng.random_range(-2.0..2.0));
-        let dir: [f32; 3] = std::array::from_fn(|_| rng.random_range(-0.5..0.5));
-        let mut z = rng.random_range(0.2f32..0.6);
-        for _ in 0..samples_per_ray {
-            out.points.push(std::array::from_fn(|c| origin[c] + z * dir[c]));
-            out.z.push(z);
-            z += rng.random_range(0.01f32..0.2);
-        }
-        out.depth_m.push(rng.random_range(0.3..3.0));
-        out.rgb.push(std::array::from_fn(|_| rng.random_range(0.0..1.0)));
-        out.states.push(if rng.random_range(0.0..1.0) < 0.6 {
-            PixelState::ThisObject
-        } else {
-            PixelState::OtherObject
-        });
-    }
-    out
-}
-
 fn bench_vmap(args: &Args, background_rays: usize) -> anyhow::Result<()> {
     let (objects, rays) = (16, 120);
     let mut batch = FieldBatch::new(AdamWConfig::default());
@@ -176,11 +150,13 @@ fn bench_vmap(args: &Args, background_rays: usize) -> anyhow::Result<()> {
     for i in 0..objects {
         let mut rng = seeded_rng(args.seed, RngStream::Object(ObjectId(i)));
         batch.push(OccupancyField::new(32, 2.0, &mut rng));
-        samples.fields.push(random_rays(&mut rng, rays, 10));
+        samples.fields.push(RaySamples::random(&mut rng, rays, 10, 2.0, 0.0));
     }
     let mut rng = seeded_rng(args.seed, RngStream::Background);
     batch.push(OccupancyField::new(128, 5.0, &mut rng));
-    samples.fields.push(random_rays(&mut rng, background_rays, 14));
+    samples
+        .fields
+        .push(RaySamples::random(&mut rng, background_rays, 14, 2.0, 0.0));
     let flops = objects as f64 * field_step_flops(32, rays * 10) + field_step_flops(128, background_rays * 14);
     let rate = steps_per_second(args.seconds, || {
         batch.train_step(&samples).context("train step")?;

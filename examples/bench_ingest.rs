@@ -85,7 +85,10 @@ fn main() -> anyhow::Result<()> {
     let source: Arc<dyn FrameSource> = Arc::new(open()?);
     let frames = source.len();
     let (w, h) = (source.intrinsics().width, source.intrinsics().height);
-    let config = MapperConfig::default();
+    let config = MapperConfig {
+        fields: catmap::config::FieldConfig::disabled(),
+        ..MapperConfig::default()
+    };
     let started = Instant::now();
     let stream = FrameStream::spawn(
         source,

@@ -11,37 +11,6 @@ use catmap::rng::{RngStream, seeded_rng};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
-/// Random rays of one field: points in a ±1.5 m box, increasing sample depths, some invalid
-/// depths, all three pixel states.
-fn random_rays(rng: &mut ChaCha8Rng, rays: usize, samples_per_ray: usize) -> RaySamples {
-    let mut out = RaySamples {
-        samples_per_ray,
-        ..RaySamples::default()
-    };
-    for _ in 0..rays {
-        let origin: [f32; 3] = std::array::from_fn(|_| rng.random_range(-1.5..1.5));
-        let dir: [f32; 3] = std::array::from_fn(|_| rng.random_range(-0.5..0.5));
-        let mut z = rng.random_range(0.2f32..0.6);
-        for _ in 0..samples_per_ray {
-            out.points.push(std::array::from_fn(|c| origin[c] + z * dir[c]));
-            out.z.push(z);
-            z += rng.random_range(0.01f32..0.2);
-        }
-        out.depth_m.push(if rng.random_range(0.0..1.0) < 0.15 {
-            0.0
-        } else {
-            rng.random_range(0.3..2.0)
-        });
-        out.rgb.push(std::array::from_fn(|_| rng.random_range(0.0..1.0)));
-        out.states.push(match rng.random_range(0..3) {
-            0 => PixelState::OtherObject,
-            1 => PixelState::ThisObject,
-            _ => PixelState::Unknown,
-        });
-    }
-    out
-}
-
 /// Worst norm-relative error over tensors: ‖a − b‖ / max(‖b‖, 1e-2·‖b_all‖). The floor keeps a
 /// tensor whose gradient nearly cancels (a one-element bias summed over all samples) from turning
 /// f32 rounding into a large relative error; typical errors are 1e-7 … 1e-6.
@@ -94,7 +63,9 @@ fn setup(
         let mut rng = seeded_rng(seed, RngStream::Object(ObjectId(i as u32)));
         let scale = if h >= 128 { 5.0 } else { 2.0 };
         batch.push(well_conditioned(OccupancyField::new(h, scale, &mut rng)));
-        samples.fields.push(random_rays(&mut rng, rays, samples_per_ray));
+        samples
+            .fields
+            .push(RaySamples::random(&mut rng, rays, samples_per_ray, 1.5, 0.15));
     }
     (batch, samples)
 }
@@ -208,7 +179,7 @@ fn adding_a_field_keeps_the_others_optimiser_state() {
     let moments = batch.fields()[0].optimiser_state().clone();
     let mut rng = seeded_rng(7, RngStream::Object(ObjectId(99)));
     batch.push(OccupancyField::new(32, 2.0, &mut rng));
-    samples.fields.push(random_rays(&mut rng, 8, 10));
+    samples.fields.push(RaySamples::random(&mut rng, 8, 10, 1.5, 0.15));
     assert_eq!(
         batch.fields()[0].optimiser_state(),
         &moments,

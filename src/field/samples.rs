@@ -59,6 +59,44 @@ impl RaySamples {
     }
 }
 
+impl RaySamples {
+    /// Random rays for benchmarks and gradient checks: origins in a ±`half_box_m` cube, sample
+    /// depths increasing from 0.2–0.6 m in steps of 1–20 cm, measured depths in 0.3–3 m (a
+    /// fraction `invalid_fraction` of them invalid), random colours and all three pixel states.
+    pub fn random(
+        rng: &mut impl rand::Rng,
+        rays: usize,
+        samples_per_ray: usize,
+        half_box_m: f32,
+        invalid_fraction: f32,
+    ) -> Self {
+        use rand::RngExt;
+        let mut out = Self {
+            samples_per_ray,
+            ..Self::default()
+        };
+        for _ in 0..rays {
+            let origin: [f32; 3] = std::array::from_fn(|_| rng.random_range(-half_box_m..half_box_m));
+            let dir: [f32; 3] = std::array::from_fn(|_| rng.random_range(-0.5..0.5));
+            let mut z = rng.random_range(0.2f32..0.6);
+            for _ in 0..samples_per_ray {
+                out.points.push(std::array::from_fn(|c| origin[c] + z * dir[c]));
+                out.z.push(z);
+                z += rng.random_range(0.01f32..0.2);
+            }
+            let invalid = rng.random::<f32>() < invalid_fraction;
+            out.depth_m.push(if invalid { 0.0 } else { rng.random_range(0.3..3.0) });
+            out.rgb.push(std::array::from_fn(|_| rng.random_range(0.0..1.0)));
+            out.states.push(match rng.random_range(0..3) {
+                0 => PixelState::OtherObject,
+                1 => PixelState::ThisObject,
+                _ => PixelState::Unknown,
+            });
+        }
+        out
+    }
+}
+
 /// The samples of one training step: one [`RaySamples`] per field, in the batch's field order.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SampleBatch {
