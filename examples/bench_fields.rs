@@ -20,7 +20,6 @@ use candle_core::{Device, Tensor};
 use catmap::field::reference::CandleMlpBatch;
 use catmap::field::{AdamWConfig, Backend, FieldBatch, GEO_DIMS, MlpBatch, OccupancyField, RaySamples, SampleBatch};
 use catmap::ids::ObjectId;
-use catmap::object_view::PixelState;
 use catmap::rng::{RngStream, seeded_rng};
 use clap::Parser;
 use rand::RngExt;

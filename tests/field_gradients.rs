@@ -6,10 +6,8 @@ use candle_core::DType;
 use catmap::field::reference::{mlp_reference, occupancy_reference};
 use catmap::field::{AdamWConfig, Backend, FieldBatch, MlpBatch, OccupancyField, ParamLayout, RaySamples, SampleBatch};
 use catmap::ids::ObjectId;
-use catmap::object_view::PixelState;
 use catmap::rng::{RngStream, seeded_rng};
 use rand::RngExt;
-use rand_chacha::ChaCha8Rng;
 
 /// Worst norm-relative error over tensors: ‖a − b‖ / max(‖b‖, 1e-2·‖b_all‖). The floor keeps a
 /// tensor whose gradient nearly cancels (a one-element bias summed over all samples) from turning
