@@ -31,3 +31,4 @@ pub mod pixel_box;
 pub mod rng;
 pub mod stream;
 pub mod synth;
+pub mod uncertainty;
