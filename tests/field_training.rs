@@ -83,7 +83,7 @@ fn every_object_with_a_box_trains_online_and_its_loss_falls() {
     }
 
     let before = mean_object_loss(&mut mapper);
-    mapper.train_offline(150, 50, |_| {});
+    mapper.train(150, 50, |_| {});
     let after = mean_object_loss(&mut mapper);
     assert_eq!(mapper.training_steps(), 2 * scene.len() as u64 + 150);
     assert!(after < 0.7 * before, "loss falls with training: {before} → {after}");
@@ -98,7 +98,7 @@ fn the_offline_protocol_trains_only_after_the_stream() {
     stream_scene(&mut mapper, &scene);
     assert_eq!(mapper.training_steps(), 0, "no step while streaming");
     let mut reported = Vec::new();
-    mapper.train_offline(120, 50, |done| reported.push(done));
+    mapper.train(120, 50, |done| reported.push(done));
     assert_eq!(reported, [50, 100, 120]);
     assert_eq!(mapper.training_steps(), 120);
 }
@@ -110,7 +110,7 @@ fn final_meshes(offline_steps: u64) -> MapMeshes {
     config.fields.offline = true;
     let mut mapper = Mapper::new(config).expect("config");
     stream_scene(&mut mapper, &scene);
-    mapper.train_offline(offline_steps, 100, |_| {});
+    mapper.train(offline_steps, 100, |_| {});
     mapper.extract_final_meshes()
 }
 

@@ -17,6 +17,8 @@ pub struct FieldConfig {
     pub steps_per_frame: usize,
     /// Training steps after the whole stream (offline; the paper's vMAP* uses 15 000).
     pub offline_iterations: usize,
+    /// Online: refinement steps on the final keyframe windows once the stream has ended.
+    pub final_steps: usize,
     /// AdamW learning rate.
     pub learning_rate: f32,
     /// AdamW decoupled weight decay.
@@ -42,6 +44,7 @@ impl Default for FieldConfig {
             offline: false,
             steps_per_frame: 20,
             offline_iterations: 15_000,
+            final_steps: 3_000,
             learning_rate: 1e-3,
             weight_decay: 0.013,
             object_scale: None,
@@ -64,6 +67,15 @@ impl FieldConfig {
         Self {
             enabled: false,
             ..Self::default()
+        }
+    }
+
+    /// Steps to run once the stream has ended: all of them offline, the refinement online.
+    pub fn steps_after_stream(&self) -> usize {
+        match (self.enabled, self.offline) {
+            (false, _) => 0,
+            (true, true) => self.offline_iterations,
+            (true, false) => self.final_steps,
         }
     }
 

@@ -124,10 +124,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     mapper.run_to_end(|frames| progress.set_position(frames));
     progress.finish_and_clear();
     stream.join();
-    if fields.enabled && fields.offline {
-        let iterations = fields.offline_iterations as u64;
-        let progress = bar(iterations, "training");
-        mapper.train_offline(iterations, 50, |done| progress.set_position(done));
+    let after_stream = fields.steps_after_stream() as u64;
+    if after_stream > 0 {
+        let progress = bar(after_stream, if fields.offline { "training" } else { "refining" });
+        mapper.train_after_stream(|done, _| progress.set_position(done));
         progress.finish_and_clear();
     }
     let mut extra_seconds = std::collections::BTreeMap::new();

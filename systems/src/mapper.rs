@@ -162,9 +162,16 @@ impl Mapper {
         }
     }
 
-    /// The offline protocol's training (call after the stream has ended): `iterations` steps on
-    /// the keyframes gathered, run in chunks of `chunk` steps; `on_progress` gets the steps done.
-    pub fn train_offline(&mut self, iterations: u64, chunk: u64, mut on_progress: impl FnMut(u64)) {
+    /// The training due once the stream has ended (`FieldConfig::steps_after_stream`: every step
+    /// offline, the refinement online), in chunks of 50; `on_progress` gets (done, total).
+    pub fn train_after_stream(&mut self, mut on_progress: impl FnMut(u64, u64)) {
+        let total = self.world.resource::<Settings>().0.fields.steps_after_stream() as u64;
+        self.train(total, 50, |done| on_progress(done, total));
+    }
+
+    /// Runs `iterations` training steps on the keyframes gathered so far (the offline protocol,
+    /// or extra refinement), in chunks of `chunk` steps; `on_progress` gets the steps done.
+    pub fn train(&mut self, iterations: u64, chunk: u64, mut on_progress: impl FnMut(u64)) {
         let mut done = 0;
         while done < iterations {
             let n = chunk.max(1).min(iterations - done);
