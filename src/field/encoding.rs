@@ -138,19 +138,29 @@ pub(crate) fn backward_chunk(
     grad_b: &mut [f32],
 ) {
     let geo_sines = GEO_DIMS - 3;
+    let geo_bands = geo_sines / NUM_DIRECTIONS;
     for s in 0..n {
         let ds = &dsin[s * TRIG_LD..][..SIN_DIMS];
         let dg = &d_geo[s * geo_ld + 3..][..geo_sines];
         let dc = &d_col[s * col_ld..][..COL_DIMS];
         let xs = &emb[s * EMB_LD..][..3];
+        // Sine i = band·21 + direction; the first bands feed geometry, the rest colour. Band by
+        // band, so that the 21-wide products vectorise.
         let mut dproj = [0.0f32; NUM_DIRECTIONS];
-        for (i, (dsv, de)) in ds.iter().zip(dg.iter().chain(dc)).enumerate() {
-            dproj[i % NUM_DIRECTIONS] += dsv * de;
-        }
-        for (j, dp) in dproj.iter().enumerate() {
-            for c in 0..3 {
-                grad_b[3 * j + c] += dp * xs[c];
+        for (band, dsb) in ds.chunks_exact(NUM_DIRECTIONS).enumerate() {
+            let de = if band < geo_bands {
+                &dg[band * NUM_DIRECTIONS..][..NUM_DIRECTIONS]
+            } else {
+                &dc[(band - geo_bands) * NUM_DIRECTIONS..][..NUM_DIRECTIONS]
+            };
+            for ((acc, a), b) in dproj.iter_mut().zip(dsb).zip(de) {
+                *acc += a * b;
             }
+        }
+        for (g, dp) in grad_b.chunks_exact_mut(3).zip(&dproj) {
+            g[0] += dp * xs[0];
+            g[1] += dp * xs[1];
+            g[2] += dp * xs[2];
         }
     }
 }
