@@ -23,6 +23,7 @@ pub mod mesh;
 pub mod meshing;
 pub mod metrics;
 pub mod nearest;
+pub mod nocs;
 pub mod object_bounds;
 pub mod object_view;
 pub mod observed_cloud;

@@ -1,0 +1,139 @@
+//! Normalised object frames (NOCS) of a category's members (METHOD.md §4).
+//!
+//! The representative's frame is its minimum-volume oriented box: `world_from_nocs = [R·s | c]`
+//! with `s = max(extent)/2`, so the box fits in the unit cube `[-1, 1]³`. Every other member is
+//! registered to the representative (`template_from_object`, rigid); in the representative's box
+//! frame its aligned cloud gets a box symmetric about the representative's centre, with extent
+//! `2·max(|max|, |min|)` per axis (at least `min_extent`), and the same construction gives its
+//! NOCS frame. All members of a category thus share axes and centre, up to their own scale.
+
+use nalgebra::{Isometry3, Point3, Similarity3, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CatmapError, Result};
+use crate::oriented_box::OrientedBox;
+
+/// A member's box and normalised frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NocsFrame {
+    /// Maps the unit cube (NOCS) to the object's box in world coordinates.
+    pub world_from_nocs: Similarity3<f32>,
+    /// The box's edge lengths along its axes, metres.
+    pub extents: Vector3<f32>,
+}
+
+impl NocsFrame {
+    /// The frame of a box: rotation and centre of the box, scale = max(extent)/2.
+    pub fn of_box(world_from_box: Isometry3<f32>, extents: Vector3<f32>) -> Self {
+        Self {
+            world_from_nocs: Similarity3::from_isometry(world_from_box, extents.max() / 2.0),
+            extents,
+        }
+    }
+
+    /// The box as an [`OrientedBox`].
+    pub fn oriented_box(&self) -> OrientedBox {
+        OrientedBox {
+            world_from_box: self.world_from_nocs.isometry,
+            half_extents: self.extents / 2.0,
+        }
+    }
+}
+
+/// The representative's frame: its oriented box.
+pub fn representative_frame(representative_box: &OrientedBox) -> NocsFrame {
+    NocsFrame::of_box(representative_box.world_from_box, representative_box.extents())
+}
+
+/// The frame of a member whose `cloud` (world) is aligned to the representative by the rigid
+/// `template_from_object` (maps the member's points onto the representative's).
+pub fn aligned_member_frame(
+    cloud: &[Point3<f32>],
+    template_from_object: &Isometry3<f32>,
+    representative: &NocsFrame,
+    min_extent: f32,
+) -> Result<NocsFrame> {
+    if cloud.is_empty() {
+        return Err(CatmapError::Degenerate(
+            "an aligned member needs at least one point".into(),
+        ));
+    }
+    let rep_box = representative.world_from_nocs.isometry;
+    let box_from_object = rep_box.inverse() * template_from_object;
+    let mut half = Vector3::repeat(0.0f32);
+    for p in cloud {
+        let q = box_from_object * p;
+        if !q.coords.iter().all(|c| c.is_finite()) {
+            return Err(CatmapError::Degenerate("non-finite point in an aligned cloud".into()));
+        }
+        half = half.sup(&q.coords.abs());
+    }
+    let extents = (half * 2.0).map(|e| e.max(min_extent));
+    // The member's box: the representative's box carried back to the member's pose.
+    let world_from_box = template_from_object.inverse() * rep_box;
+    Ok(NocsFrame::of_box(world_from_box, extents))
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Translation3, UnitQuaternion};
+
+    use super::*;
+
+    #[test]
+    fn the_representative_box_fits_the_unit_cube() {
+        let b = OrientedBox {
+            world_from_box: Isometry3::from_parts(
+                Translation3::new(1.0, 2.0, 0.4),
+                UnitQuaternion::from_euler_angles(0.0, 0.0, 0.6),
+            ),
+            half_extents: Vector3::new(0.2, 0.4, 0.3),
+        };
+        let frame = representative_frame(&b);
+        assert!(
+            (frame.world_from_nocs.scaling() - 0.4).abs() < 1e-6,
+            "s = max(extent)/2"
+        );
+        let corner = frame.world_from_nocs * Point3::new(0.5, 1.0, 0.75);
+        let want = b.world_from_box * Point3::new(0.2, 0.4, 0.3);
+        assert!((corner - want).norm() < 1e-5, "NOCS (0.5, 1, 0.75) is the box corner");
+    }
+
+    #[test]
+    fn an_aligned_member_gets_a_symmetric_box_in_its_own_pose() {
+        let rep = NocsFrame::of_box(Isometry3::translation(0.0, 0.0, 0.5), Vector3::new(0.4, 0.4, 1.0));
+        // The member is the representative moved by 2 m along x and turned 90° about z; its cloud
+        // covers only one side (x from -0.1 to 0.2 in the representative's frame).
+        let object_from_template = Isometry3::from_parts(
+            Translation3::new(2.0, 0.0, 0.0),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, std::f32::consts::FRAC_PI_2),
+        );
+        let template_cloud = [
+            Point3::new(-0.1, 0.05, 0.3),
+            Point3::new(0.2, -0.15, 0.9),
+            Point3::new(0.0, 0.0, 0.02),
+        ];
+        let cloud: Vec<Point3<f32>> = template_cloud.iter().map(|p| object_from_template * p).collect();
+        let frame = aligned_member_frame(&cloud, &object_from_template.inverse(), &rep, 0.1).expect("frame");
+        let e = frame.extents;
+        assert!(
+            (e - Vector3::new(0.4, 0.3, 0.96)).norm() < 1e-5,
+            "2·max(|max|, |min|) per axis: {e}"
+        );
+        let centre = frame.world_from_nocs.isometry.translation.vector;
+        assert!(
+            (centre - Vector3::new(2.0, 0.0, 0.5)).norm() < 1e-5,
+            "centre follows the member: {centre}"
+        );
+        let x_axis = frame.world_from_nocs.isometry.rotation * Vector3::x();
+        assert!(
+            (x_axis - Vector3::y()).norm() < 1e-5,
+            "axes follow the member's rotation"
+        );
+        let all_inside = cloud.iter().all(|p| {
+            let q = frame.world_from_nocs.inverse() * p;
+            q.coords.iter().all(|c| c.abs() <= 1.0 + 1e-5)
+        });
+        assert!(all_inside, "the member's cloud lies in its unit cube");
+    }
+}
