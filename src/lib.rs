@@ -15,6 +15,7 @@ pub use error::{CatmapError, Result};
 pub use frame::{CameraIntrinsics, InstanceLabel, InstanceMask, RgbdFrame, SharedFrame};
 pub use ids::{ClassId, FrameIndex, ObjectId};
 pub mod atomic_file;
+pub mod category;
 pub mod field;
 pub mod frame_observation;
 pub mod image_ops;
