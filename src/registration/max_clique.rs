@@ -130,240 +130,200 @@ pub struct Clique {
 }
 
 /// A maximum clique of `graph`, exact unless the search needs more than `max_nodes` nodes.
+///
+/// Vertices are relabelled by degeneracy position and the adjacency is held as one bit row per
+/// vertex (V²/8 bytes: 12.5 MB for the default 10 000 correspondences).
 pub fn maximum_clique(graph: &Graph, max_nodes: u64) -> Clique {
-    if graph.vertex_count() == 0 {
+    let n = graph.vertex_count();
+    if n == 0 {
         return Clique {
             vertices: Vec::new(),
             proven_maximum: true,
         };
     }
     let cores = core_numbers(graph);
-    let mut best = greedy_clique(graph, &cores);
-    let max_core = cores.core.iter().copied().max().unwrap_or(0) as usize;
+    let bits = BitGraph::new(graph, &cores);
+    let mut best = bits.greedy_clique();
+    let max_core = bits.core.last().copied().unwrap_or(0) as usize;
     let mut search = BranchAndBound {
+        bits: &bits,
         nodes: 0,
         max_nodes,
         aborted: false,
     };
     if best.len() <= max_core {
-        let mut position = vec![0usize; graph.vertex_count()];
-        for (i, &v) in cores.order.iter().enumerate() {
-            position[v as usize] = i;
-        }
-        let mut scratch = LocalScratch::new(graph.vertex_count());
-        for &v in &cores.order {
+        for v in 0..n {
             if search.aborted {
                 break;
             }
-            if (cores.core[v as usize] as usize) < best.len() {
+            // Candidates: later vertices adjacent to v whose core admits a larger clique.
+            let first = bits.first_with_core(best.len()).max(v + 1);
+            let mut candidates = bits.row(v).to_vec();
+            clear_below(&mut candidates, first);
+            if (bits.core[v] as usize) < best.len() || popcount(&candidates) < best.len() {
                 continue;
             }
-            let later: Vec<u32> = graph
-                .neighbours(v)
-                .iter()
-                .copied()
-                .filter(|&u| {
-                    position[u as usize] > position[v as usize] && cores.core[u as usize] as usize >= best.len()
-                })
-                .collect();
-            if later.len() < best.len() {
-                continue;
-            }
-            let local = scratch.subgraph(graph, &later, best.len());
-            search.seed(v, &local, &mut best);
+            let mut clique = vec![v];
+            search.expand(&mut clique, candidates, &mut best);
         }
     }
-    best.sort_unstable();
+    let mut vertices: Vec<u32> = best.iter().map(|&v| cores.order[v]).collect();
+    vertices.sort_unstable();
     Clique {
-        vertices: best,
+        vertices,
         proven_maximum: !search.aborted,
     }
 }
 
-/// The greedy lower bound of step 2.
-fn greedy_clique(graph: &Graph, cores: &Cores) -> Vec<u32> {
-    let core = |v: u32| cores.core[v as usize];
-    let mut best: Vec<u32> = vec![cores.order[cores.order.len() - 1]];
-    let mut in_candidates = vec![false; graph.vertex_count()];
-    for &v in cores.order.iter().rev() {
-        if core(v) as usize + 1 <= best.len() {
-            continue;
+/// The graph relabelled by degeneracy position (so core numbers are non-decreasing in the
+/// label), with bitset adjacency rows.
+struct BitGraph {
+    words: usize,
+    rows: Vec<u64>,
+    core: Vec<u32>,
+}
+
+impl BitGraph {
+    fn new(graph: &Graph, cores: &Cores) -> Self {
+        let n = graph.vertex_count();
+        let words = n.div_ceil(64);
+        let mut position = vec![0usize; n];
+        for (i, &v) in cores.order.iter().enumerate() {
+            position[v as usize] = i;
         }
-        let mut clique = vec![v];
-        let mut candidates: Vec<u32> = graph
-            .neighbours(v)
-            .iter()
-            .copied()
-            .filter(|&u| core(u) as usize >= best.len())
-            .collect();
-        while !candidates.is_empty() && clique.len() + candidates.len() > best.len() {
-            let &u = candidates
-                .iter()
-                .max_by_key(|&&u| (core(u), std::cmp::Reverse(u)))
-                .expect("candidates are not empty");
-            clique.push(u);
-            for &w in graph.neighbours(u) {
-                in_candidates[w as usize] = true;
-            }
-            candidates.retain(|&w| in_candidates[w as usize]);
-            for &w in graph.neighbours(u) {
-                in_candidates[w as usize] = false;
+        let mut rows = vec![0u64; n * words];
+        for (v, list) in graph.adjacency.iter().enumerate() {
+            let row = &mut rows[position[v] * words..(position[v] + 1) * words];
+            for &u in list {
+                let u = position[u as usize];
+                row[u / 64] |= 1 << (u % 64);
             }
         }
-        if clique.len() > best.len() {
-            best = clique;
-        }
-    }
-    best
-}
-
-/// A small induced subgraph with bitset rows, local ids sorted by decreasing local degree.
-struct LocalGraph {
-    global: Vec<u32>,
-    rows: Vec<Vec<u64>>,
-}
-
-/// Reused buffers mapping global vertex ids to local ones.
-struct LocalScratch {
-    local_of: Vec<u32>,
-}
-
-impl LocalScratch {
-    fn new(vertex_count: usize) -> Self {
-        Self {
-            local_of: vec![u32::MAX; vertex_count],
-        }
+        let core = cores.order.iter().map(|&v| cores.core[v as usize]).collect();
+        Self { words, rows, core }
     }
 
-    /// The subgraph induced by `vertices`, without vertices of local degree < `min_size` − 1.
-    fn subgraph(&mut self, graph: &Graph, vertices: &[u32], min_size: usize) -> LocalGraph {
-        for (i, &v) in vertices.iter().enumerate() {
-            self.local_of[v as usize] = i as u32;
-        }
-        let lists: Vec<Vec<u32>> = vertices
-            .iter()
-            .map(|&v| {
-                graph
-                    .neighbours(v)
-                    .iter()
-                    .map(|&u| self.local_of[u as usize])
-                    .filter(|&l| l != u32::MAX)
-                    .collect()
-            })
-            .collect();
-        for &v in vertices {
-            self.local_of[v as usize] = u32::MAX;
-        }
-        let mut kept: Vec<usize> = (0..vertices.len()).filter(|&i| lists[i].len() + 2 > min_size).collect();
-        kept.sort_by_key(|&i| (std::cmp::Reverse(lists[i].len()), i));
-        let mut new_of = vec![u32::MAX; vertices.len()];
-        for (new, &old) in kept.iter().enumerate() {
-            new_of[old] = new as u32;
-        }
-        let words = kept.len().div_ceil(64);
-        let rows = kept
-            .iter()
-            .map(|&old| {
-                let mut row = vec![0u64; words];
-                for &l in &lists[old] {
-                    let new = new_of[l as usize];
-                    if new != u32::MAX {
-                        row[new as usize / 64] |= 1 << (new % 64);
-                    }
+    fn row(&self, v: usize) -> &[u64] {
+        &self.rows[v * self.words..(v + 1) * self.words]
+    }
+
+    /// The first label whose core number is at least `k` (labels after it all qualify).
+    fn first_with_core(&self, k: usize) -> usize {
+        self.core.partition_point(|&c| (c as usize) < k)
+    }
+
+    /// Step 2: from each vertex, highest core first, add the candidate of highest core (the
+    /// highest label) and keep its neighbours as the next candidates.
+    fn greedy_clique(&self) -> Vec<usize> {
+        let n = self.core.len();
+        let mut best = vec![n - 1];
+        for v in (0..n).rev() {
+            if self.core[v] as usize + 1 <= best.len() {
+                continue;
+            }
+            let mut candidates = self.row(v).to_vec();
+            clear_below(&mut candidates, self.first_with_core(best.len()));
+            let mut clique = vec![v];
+            while let Some(u) = highest_bit(&candidates) {
+                if clique.len() + popcount(&candidates) <= best.len() {
+                    break;
                 }
-                row
-            })
-            .collect();
-        LocalGraph {
-            global: kept.iter().map(|&old| vertices[old]).collect(),
-            rows,
+                clique.push(u);
+                and_assign(&mut candidates, self.row(u));
+            }
+            if clique.len() > best.len() {
+                best = clique;
+            }
         }
+        best
     }
 }
 
-struct BranchAndBound {
+struct BranchAndBound<'a> {
+    bits: &'a BitGraph,
     nodes: u64,
     max_nodes: u64,
     aborted: bool,
 }
 
-impl BranchAndBound {
-    /// Searches cliques {v} ∪ C with C ⊆ `local`, improving `best` (global ids).
-    fn seed(&mut self, v: u32, local: &LocalGraph, best: &mut Vec<u32>) {
-        let n = local.global.len();
-        let mut candidates = vec![0u64; n.div_ceil(64)];
-        for i in 0..n {
-            candidates[i / 64] |= 1 << (i % 64);
-        }
-        let mut clique = Vec::new();
-        let mut found: Option<Vec<usize>> = None;
-        let mut best_len = best.len();
-        self.expand(local, &mut clique, candidates, &mut best_len, &mut found);
-        if let Some(members) = found {
-            *best = std::iter::once(v)
-                .chain(members.iter().map(|&i| local.global[i]))
-                .collect();
-        }
-    }
-
-    /// MCQ: colour the candidates greedily, then branch on them from the highest colour down.
-    /// `best_len` counts the seed vertex, `clique` does not.
-    fn expand(
-        &mut self,
-        local: &LocalGraph,
-        clique: &mut Vec<usize>,
-        candidates: Vec<u64>,
-        best_len: &mut usize,
-        found: &mut Option<Vec<usize>>,
-    ) {
+impl BranchAndBound<'_> {
+    /// MCQ: colour the candidates greedily, then branch on them from the highest colour down,
+    /// pruning when |clique| + colour ≤ |best|.
+    fn expand(&mut self, clique: &mut Vec<usize>, candidates: Vec<u64>, best: &mut Vec<usize>) {
         self.nodes += 1;
         if self.nodes > self.max_nodes {
             self.aborted = true;
             return;
         }
-        let (order, colours) = colour_sort(local, &candidates);
+        let (order, colours) = self.colour_sort(&candidates);
         let mut remaining = candidates;
         for k in (0..order.len()).rev() {
-            if 1 + clique.len() + colours[k] <= *best_len || self.aborted {
+            if clique.len() + colours[k] <= best.len() || self.aborted {
                 return;
             }
             let v = order[k];
             clique.push(v);
-            let next: Vec<u64> = remaining.iter().zip(&local.rows[v]).map(|(a, b)| a & b).collect();
+            let mut next = remaining.clone();
+            and_assign(&mut next, self.bits.row(v));
             if next.iter().all(|&w| w == 0) {
-                if 1 + clique.len() > *best_len {
-                    *best_len = 1 + clique.len();
-                    *found = Some(clique.clone());
+                if clique.len() > best.len() {
+                    best.clone_from(clique);
                 }
             } else {
-                self.expand(local, clique, next, best_len, found);
+                self.expand(clique, next, best);
             }
             clique.pop();
             remaining[v / 64] &= !(1 << (v % 64));
         }
     }
+
+    /// Greedy sequential colouring: the vertices by colour and each one's colour (1-based).
+    fn colour_sort(&self, candidates: &[u64]) -> (Vec<usize>, Vec<usize>) {
+        let lo = candidates.iter().position(|&w| w != 0).unwrap_or(candidates.len());
+        let mut uncoloured = candidates.to_vec();
+        let (mut order, mut colours) = (Vec::new(), Vec::new());
+        let mut colour = 0;
+        while uncoloured[lo..].iter().any(|&w| w != 0) {
+            colour += 1;
+            let mut open = uncoloured.clone();
+            while let Some(word) = open[lo..].iter().position(|&w| w != 0).map(|w| w + lo) {
+                let v = word * 64 + open[word].trailing_zeros() as usize;
+                open[word] &= !(1 << (v % 64));
+                uncoloured[word] &= !(1 << (v % 64));
+                for (o, r) in open[lo..].iter_mut().zip(&self.bits.row(v)[lo..]) {
+                    *o &= !r;
+                }
+                order.push(v);
+                colours.push(colour);
+            }
+        }
+        (order, colours)
+    }
 }
 
-/// Greedy sequential colouring: returns the vertices by colour and each one's colour (1-based).
-fn colour_sort(local: &LocalGraph, candidates: &[u64]) -> (Vec<usize>, Vec<usize>) {
-    let mut uncoloured = candidates.to_vec();
-    let (mut order, mut colours) = (Vec::new(), Vec::new());
-    let mut colour = 0;
-    while uncoloured.iter().any(|&w| w != 0) {
-        colour += 1;
-        let mut open = uncoloured.clone();
-        while let Some(word) = open.iter().position(|&w| w != 0) {
-            let v = word * 64 + open[word].trailing_zeros() as usize;
-            open[word] &= !(1 << (v % 64));
-            uncoloured[word] &= !(1 << (v % 64));
-            for (o, r) in open.iter_mut().zip(&local.rows[v]) {
-                *o &= !r;
-            }
-            order.push(v);
-            colours.push(colour);
-        }
+fn popcount(set: &[u64]) -> usize {
+    set.iter().map(|w| w.count_ones() as usize).sum()
+}
+
+fn highest_bit(set: &[u64]) -> Option<usize> {
+    set.iter()
+        .rposition(|&w| w != 0)
+        .map(|i| i * 64 + 63 - set[i].leading_zeros() as usize)
+}
+
+fn and_assign(set: &mut [u64], other: &[u64]) {
+    for (a, b) in set.iter_mut().zip(other) {
+        *a &= b;
     }
-    (order, colours)
+}
+
+/// Clears every bit below `first`.
+fn clear_below(set: &mut [u64], first: usize) {
+    let word = (first / 64).min(set.len());
+    set[..word].iter_mut().for_each(|w| *w = 0);
+    if word < set.len() && first % 64 != 0 {
+        set[word] &= !0 << (first % 64);
+    }
 }
 
 #[cfg(test)]
