@@ -29,6 +29,8 @@ pub struct MapperConfig {
     pub fields: FieldConfig,
     /// Mesh extraction.
     pub meshes: MeshConfig,
+    /// Category-level registration: representatives, subcategories, NOCS frames.
+    pub categories: crate::class_registration::CategoryConfig,
     /// Live visualisation.
     pub rerun: RerunConfig,
 }

@@ -132,6 +132,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     }
     let mut extra_seconds = std::collections::BTreeMap::new();
     if fields.enabled {
+        let path = args.out.join("categories.json");
+        catmap_systems::categories_report::write_category_records(&mapper.category_records(), &path)?;
+        tracing::info!(path = %path.display(), "categories written");
+    }
+    if fields.enabled {
         let meshes = mapper.extract_final_meshes();
         let dir = args.out.join("meshes");
         let written = meshes.write_dir(&dir)?;

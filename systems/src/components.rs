@@ -119,3 +119,29 @@ pub struct FieldMesh {
     /// Final resolution (`meshes.object`) rather than a preview.
     pub is_final: bool,
 }
+
+/// The object's uncertainty sphere at its class's latest registration.
+#[derive(Component, Debug, Clone, PartialEq)]
+pub struct Reliability(pub catmap::uncertainty::ObjectReliability);
+
+/// The object's place in its class: subcategory, representative, alignment and NOCS frame.
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct Membership {
+    /// The class.
+    pub class: ClassId,
+    /// Index of its subcategory within the class.
+    pub subcategory: usize,
+    /// The subcategory's representative.
+    pub representative: ObjectId,
+    /// Alignment to the representative and the object's box / NOCS frame.
+    pub member: catmap::class_registration::RegisteredMember,
+}
+
+/// A category's subcategories at its latest registration, and the cloud sizes it was computed at.
+#[derive(Component, Debug, Clone, PartialEq)]
+pub struct Subcategories {
+    /// Subcategories in the order they were split off.
+    pub groups: Vec<catmap::class_registration::RegisteredSubcategory>,
+    /// Cloud points of each member when registered.
+    pub registered_points: BTreeMap<ObjectId, usize>,
+}

@@ -4,6 +4,7 @@
 //! Systems are thin: they read components, call a `catmap::` function and write components.
 //! [`schedule::build_schedule`] is the only place that orders them; [`mapper::Mapper`] is the facade.
 
+pub mod categories_report;
 pub mod categorize;
 pub mod cleanup;
 pub mod clouds;
@@ -12,6 +13,7 @@ pub mod ingest;
 pub mod log_rerun;
 pub mod mapper;
 pub mod meshes;
+pub mod register;
 pub mod resources;
 pub mod schedule;
 pub mod segment;

@@ -8,6 +8,9 @@
 //!   `world/objects/{id}/box` — minimum-volume oriented box, labelled with class and id;
 //!   `world/objects/{id}/mesh` — the field's mesh (previews, then final), vertex-coloured;
 //!   `world/objects/{id}/loss` — the field's training loss (scalar, once per tick);
+//!   `world/objects/{id}/aligned_box` — the box in the representative's frame, coloured by
+//!   subcategory, labelled "chair 3 · sub 0" (+ " · rep" for the representative);
+//!   `world/objects/{id}/reliability` — the uncertainty sphere's points coloured by g(u);
 //! - `world/background/mesh`, `world/background/loss` — the same for the background field.
 
 use std::collections::BTreeMap;
@@ -18,7 +21,9 @@ use catmap::image_ops::{downscale_nearest, downscale_rgb};
 use catmap::{ClassId, InstanceLabel, ObjectId, RgbdFrame};
 use image::ImageEncoder;
 
-use crate::components::{CameraFrame, FieldLoss, FieldMesh, Object, ObjectBounds, ObjectClass, ObjectCloud};
+use crate::components::{
+    CameraFrame, FieldLoss, FieldMesh, Membership, Object, ObjectBounds, ObjectClass, ObjectCloud, Reliability,
+};
 use crate::resources::{Settings, StreamProgress};
 
 /// Fixed entity paths.
@@ -257,6 +262,74 @@ pub fn log_field_meshes(
         warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
     }
 }
+
+/// Logs each re-registered object's aligned box (coloured by subcategory, the representative
+/// labelled) and its uncertainty sphere (points coloured from red, g = 0, to green, g = 1).
+pub fn log_memberships(
+    rerun: Res<Rerun>,
+    progress: Res<StreamProgress>,
+    members: Query<(&Object, &Membership, Option<&Reliability>), Changed<Membership>>,
+) {
+    if let Some(frame) = progress.last_frame {
+        rerun.0.set_time_sequence(paths::TIMELINE, frame.0 as i64);
+    }
+    for (object, membership, reliability) in &members {
+        let b = membership.member.nocs.oriented_box();
+        let c = b.center();
+        let q = b.world_from_box.rotation;
+        let [r, g, bl] = SUBCATEGORY_PALETTE[membership.subcategory % SUBCATEGORY_PALETTE.len()];
+        let rep = if membership.representative == object.id {
+            " · rep"
+        } else {
+            ""
+        };
+        let label = format!(
+            "{} · sub {}{rep}",
+            object_label(object.id, membership.class),
+            membership.subcategory
+        );
+        let archetype = rerun::Boxes3D::from_centers_and_half_sizes(
+            [[c.x, c.y, c.z]],
+            [[b.half_extents.x, b.half_extents.y, b.half_extents.z]],
+        )
+        .with_quaternions([rerun::Quaternion::from_xyzw([q.i, q.j, q.k, q.w])])
+        .with_colors([rerun::Color::from_rgb(r, g, bl)])
+        .with_labels([label]);
+        let path = format!("{}/aligned_box", paths::object(object.id));
+        warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
+        if let Some(reliability) = reliability {
+            let sphere = &reliability.0;
+            let positions: Vec<[f32; 3]> = sphere
+                .sphere_points
+                .iter()
+                .step_by(4)
+                .map(|p| [p.x, p.y, p.z])
+                .collect();
+            let colors: Vec<rerun::Color> = sphere
+                .reliability
+                .iter()
+                .step_by(4)
+                .map(|g| {
+                    let t = g.clamp(0.0, 1.0);
+                    rerun::Color::from_rgb(((1.0 - t) * 255.0) as u8, (t * 255.0) as u8, 40)
+                })
+                .collect();
+            let archetype = rerun::Points3D::new(positions).with_colors(colors).with_radii([0.006]);
+            let path = format!("{}/reliability", paths::object(object.id));
+            warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
+        }
+    }
+}
+
+/// Colours of subcategories 0, 1, 2, …
+const SUBCATEGORY_PALETTE: [[u8; 3]; 6] = [
+    [31, 119, 180],
+    [255, 127, 14],
+    [44, 160, 44],
+    [214, 39, 40],
+    [148, 103, 189],
+    [140, 86, 75],
+];
 
 /// "chair 3": the class name (or number) and the object id.
 fn object_label(id: ObjectId, class: ClassId) -> String {

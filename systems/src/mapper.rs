@@ -193,6 +193,11 @@ impl Mapper {
         collect_meshes(&mut self.world)
     }
 
+    /// Every class's subcategories as registered so far (see `categories.json`).
+    pub fn category_records(&mut self) -> Vec<crate::categories_report::ClassRecord> {
+        crate::categories_report::category_records(&mut self.world)
+    }
+
     /// The latest meshes (previews or final) of every field.
     pub fn meshes(&mut self) -> MapMeshes {
         collect_meshes(&mut self.world)

@@ -8,10 +8,11 @@ use crate::cleanup::despawn_consumed_frames;
 use crate::clouds::{accumulate_clouds, refresh_object_bounds};
 use crate::ingest::ingest_frames;
 use crate::log_rerun::{
-    Rerun, log_camera_frames, log_field_losses, log_field_meshes, log_instance_legend, log_object_boxes,
-    log_object_clouds,
+    Rerun, log_camera_frames, log_field_losses, log_field_meshes, log_instance_legend, log_memberships,
+    log_object_boxes, log_object_clouds,
 };
 use crate::meshes::{extract_final_meshes, extract_preview_meshes};
+use crate::register::register_categories;
 use crate::segment::observe_frames;
 use crate::track::{record_background_views, record_object_views, spawn_new_objects};
 use crate::train::{attach_fields, queue_online_steps, train_fields};
@@ -31,6 +32,8 @@ pub enum MapperSystems {
     Categorize,
     /// Fields appear for objects with a box; queued training steps run.
     Train,
+    /// Classes are (re-)registered: representatives, subcategories, NOCS frames.
+    Register,
     /// Preview meshes every few frames.
     Mesh,
     /// Rerun logging (only when a `Rerun` resource exists).
@@ -56,6 +59,7 @@ pub fn build_schedule() -> Schedule {
             MapperSystems::Map,
             MapperSystems::Categorize,
             MapperSystems::Train,
+            MapperSystems::Register,
             MapperSystems::Mesh,
             MapperSystems::Log,
             MapperSystems::Cleanup,
@@ -76,6 +80,7 @@ pub fn build_schedule() -> Schedule {
         (attach_fields, queue_online_steps, train_fields)
             .chain()
             .in_set(MapperSystems::Train),
+        register_categories.in_set(MapperSystems::Register),
         extract_preview_meshes.in_set(MapperSystems::Mesh),
         (
             log_camera_frames,
@@ -84,6 +89,7 @@ pub fn build_schedule() -> Schedule {
             log_object_boxes,
             log_field_losses,
             log_field_meshes,
+            log_memberships,
         )
             .chain()
             .in_set(MapperSystems::Log),
@@ -98,8 +104,11 @@ pub fn build_training_schedule() -> Schedule {
     let mut schedule = Schedule::default();
     schedule.set_executor(SingleThreadedExecutor::new());
     schedule.add_systems((
-        (attach_fields, train_fields).chain(),
-        log_field_losses.after(train_fields).run_if(resource_exists::<Rerun>),
+        (attach_fields, train_fields, register_categories).chain(),
+        (log_field_losses, log_memberships)
+            .chain()
+            .after(register_categories)
+            .run_if(resource_exists::<Rerun>),
     ));
     schedule
 }

@@ -1,0 +1,166 @@
+//! Register stage: a class's representative, its members' registrations and its subcategories are
+//! recomputed when the class gains a member or a member's cloud has grown enough — not every
+//! frame. Members wait until their fields have trained (uncertainty needs a trained field).
+
+use std::collections::BTreeMap;
+
+use bevy_ecs::prelude::*;
+use catmap::class_registration::{MemberInput, register_class};
+use catmap::rng::{RngStream, seeded_rng};
+use catmap::uncertainty::object_reliability;
+use catmap::{ClassId, ObjectId};
+use nalgebra::Point3;
+use rayon::prelude::*;
+
+use crate::components::{
+    Category, FieldLoss, FieldSlot, Membership, Object, ObjectBounds, ObjectCloud, Reliability, Subcategories,
+};
+use crate::resources::{Fields, ObjectIndex, Settings, StageTimes};
+
+/// What one member contributes, read from its components.
+struct Ready {
+    entity: Entity,
+    id: ObjectId,
+    cloud: Vec<Point3<f32>>,
+    bounds: catmap::oriented_box::OrientedBox,
+    slot: FieldSlot,
+}
+
+/// Re-registers every class whose membership changed or whose members' clouds grew by more than
+/// `categories.reregister_growth` since its last registration (classes in id order).
+pub fn register_categories(
+    settings: Res<Settings>,
+    fields: Res<Fields>,
+    index: Res<ObjectIndex>,
+    mut categories: Query<(Entity, &Category, Option<&mut Subcategories>)>,
+    objects: Query<(
+        &Object,
+        &ObjectCloud,
+        Option<&ObjectBounds>,
+        Option<&FieldSlot>,
+        Option<&FieldLoss>,
+    )>,
+    mut times: ResMut<StageTimes>,
+    mut commands: Commands,
+) {
+    let cfg = &settings.0.categories;
+    if !cfg.enabled || !settings.0.fields.enabled {
+        return;
+    }
+    let mut due: Vec<(Entity, ClassId, Vec<Ready>)> = Vec::new();
+    for (entity, category, previous) in &categories {
+        let mut ready = Vec::new();
+        for id in &category.members {
+            let Some((object, cloud, Some(bounds), Some(slot), Some(loss))) =
+                index.0.get(id).and_then(|e| objects.get(*e).ok())
+            else {
+                break;
+            };
+            if loss.steps < cfg.min_field_steps {
+                break;
+            }
+            ready.push(Ready {
+                entity: index.0[&object.id],
+                id: object.id,
+                cloud: cloud.0.points(),
+                bounds: bounds.oriented_box,
+                slot: *slot,
+            });
+        }
+        if ready.len() < category.members.len() {
+            continue; // wait until every member has a trained field
+        }
+        let stale = previous.is_none_or(|p| {
+            p.registered_points.len() != ready.len()
+                || ready.iter().any(|r| {
+                    p.registered_points
+                        .get(&r.id)
+                        .is_none_or(|&n| r.cloud.len() as f64 > n as f64 * (1.0 + f64::from(cfg.reregister_growth)))
+                })
+        });
+        if stale {
+            due.push((entity, category.class, ready));
+        }
+    }
+    if due.is_empty() {
+        return;
+    }
+    let _timer = times.start("register");
+    let seed = settings.0.seed;
+    for (category_entity, class, ready) in due {
+        // Uncertainty spheres (only needed to rank several members).
+        let reliabilities: Vec<_> = if ready.len() > 1 {
+            ready
+                .par_iter()
+                .map(|r| {
+                    let field = fields.objects.field(r.slot.index)?;
+                    let mut rng = seeded_rng(seed, RngStream::ObjectField(r.id));
+                    let origin = r.slot.origin.coords;
+                    Some(object_reliability(
+                        &r.bounds.center(),
+                        &r.bounds.half_extents,
+                        &cfg.uncertainty,
+                        &mut rng,
+                        |points| {
+                            let local: Vec<[f32; 3]> = points.iter().map(|p| (p - origin).coords.into()).collect();
+                            field.eval_alpha(&local)
+                        },
+                    ))
+                })
+                .collect()
+        } else {
+            vec![None]
+        };
+        let inputs: Vec<MemberInput> = ready
+            .iter()
+            .zip(&reliabilities)
+            .map(|(r, rel)| MemberInput {
+                id: r.id,
+                cloud: r.cloud.clone(),
+                bounds: r.bounds,
+                reliable_rays: rel.as_ref().map_or(0, |x| x.reliable_rays),
+            })
+            .collect();
+        let class_seed = seed ^ (u64::from(class.0) << 32);
+        let groups = match register_class(&inputs, cfg, class_seed) {
+            Ok(groups) => groups,
+            Err(e) => {
+                tracing::warn!(class = %class, error = %e, "class registration failed");
+                continue;
+            }
+        };
+        for (r, rel) in ready.iter().zip(reliabilities) {
+            if let Some(reliability) = rel {
+                commands.entity(r.entity).insert(Reliability(reliability));
+            }
+        }
+        for (k, group) in groups.iter().enumerate() {
+            for (id, member) in &group.members {
+                if let Some(r) = ready.iter().find(|r| r.id == *id) {
+                    commands.entity(r.entity).insert(Membership {
+                        class,
+                        subcategory: k,
+                        representative: group.representative,
+                        member: *member,
+                    });
+                }
+            }
+        }
+        let summary: Vec<(ObjectId, Vec<ObjectId>)> = groups
+            .iter()
+            .map(|g| (g.representative, g.members.keys().copied().collect()))
+            .collect();
+        tracing::info!(class = %class, subcategories = ?summary, "class registered");
+        let registered_points: BTreeMap<ObjectId, usize> = ready.iter().map(|r| (r.id, r.cloud.len())).collect();
+        let record = Subcategories {
+            groups,
+            registered_points,
+        };
+        match categories.get_mut(category_entity) {
+            Ok((_, _, Some(mut previous))) => *previous = record,
+            _ => {
+                commands.entity(category_entity).insert(record);
+            }
+        }
+    }
+}
