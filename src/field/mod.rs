@@ -19,6 +19,7 @@
 //! | `occupancy` | the occupancy MLP on a chunk (fused forward + backward) |
 //! | `object_field`, `batch`, `tasks`, `samples` | fields, the batched step, its parallel plan |
 //! | `ray_sampler` | the depth-guided sampler: keyframes, pixels, depths along rays |
+//! | `tensors` | parameters as named candle tensors |
 //! | `mlp` | a plain MLP batch on the same machinery (benchmark shape) |
 
 mod adamw;
@@ -38,6 +39,7 @@ mod render;
 mod samples;
 mod simd;
 mod tasks;
+mod tensors;
 
 pub use adamw::{AdamWConfig, AdamWState};
 pub use batch::{CHUNK_SAMPLES, FieldBatch};
