@@ -1,7 +1,8 @@
 //! Nearest-neighbour distances between point sets (a k-d tree over the reference points).
 //!
 //! Used wherever a distance "from each point of P to the closest point of Q" is needed: cloud
-//! accuracy against ground truth, Chamfer scores, metrics.
+//! accuracy against ground truth, Chamfer scores, metrics; and, by index, the closest point and
+//! the points within a radius (registration, normals, FPFH).
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::Point3;
@@ -60,6 +61,31 @@ impl PointIndex {
         let sum: f64 = self.nearest_distances(queries).iter().map(|&d| f64::from(d)).sum();
         (sum / queries.len() as f64) as f32
     }
+
+    /// Index of the point closest to `p` and the squared distance to it.
+    pub fn nearest(&self, p: &Point3<f32>) -> (usize, f32) {
+        let hit = self
+            .tree
+            .query(&[p.x, p.y, p.z])
+            .nearest_one::<SquaredEuclidean<f32>>()
+            .execute();
+        (hit.item as usize, hit.distance)
+    }
+
+    /// Indices of the points within `radius` of `p` (inclusive), in increasing index order.
+    pub fn within(&self, p: &Point3<f32>, radius: f32) -> Vec<usize> {
+        let mut found: Vec<usize> = self
+            .tree
+            .query(&[p.x, p.y, p.z])
+            .within::<SquaredEuclidean<f32>>(radius * radius)
+            .unsorted()
+            .execute()
+            .into_iter()
+            .map(|hit| hit.item as usize)
+            .collect();
+        found.sort_unstable();
+        found
+    }
 }
 
 #[cfg(test)]
@@ -86,5 +112,20 @@ mod tests {
     fn empty_and_non_finite_sets_are_rejected() {
         assert!(PointIndex::new(&[]).is_err());
         assert!(PointIndex::new(&[Point3::new(f32::NAN, 0.0, 0.0)]).is_err());
+    }
+
+    #[test]
+    fn queries_match_brute_force() {
+        let points: Vec<Point3<f32>> = (0..60)
+            .map(|i| Point3::new((i % 4) as f32 * 0.1, (i / 4 % 5) as f32 * 0.1, (i / 20) as f32 * 0.1))
+            .collect();
+        let index = PointIndex::new(&points).expect("non-empty");
+        let q = Point3::new(0.12, 0.21, 0.09);
+        let brute_nearest = (0..points.len())
+            .min_by(|&a, &b| (points[a] - q).norm().total_cmp(&(points[b] - q).norm()))
+            .expect("non-empty");
+        assert_eq!(index.nearest(&q).0, brute_nearest);
+        let brute_within: Vec<usize> = (0..points.len()).filter(|&i| (points[i] - q).norm() <= 0.15).collect();
+        assert_eq!(index.within(&q, 0.15), brute_within);
     }
 }

@@ -10,7 +10,7 @@
 use nalgebra::{Point3, Vector3};
 
 use super::consistency::Correspondence;
-use super::kd::KdIndex;
+use crate::nearest::PointIndex;
 
 /// Bins per angle.
 const BINS: usize = 11;
@@ -24,7 +24,7 @@ pub type Fpfh = [f32; FPFH_LEN];
 pub fn fpfh_descriptors(
     points: &[Point3<f32>],
     normals: &[Option<Vector3<f32>>],
-    index: &KdIndex,
+    index: &PointIndex,
     radius_m: f32,
 ) -> Vec<Option<Fpfh>> {
     let neighbours: Vec<Vec<usize>> = points
@@ -152,7 +152,7 @@ mod tests {
     }
 
     fn descriptors(points: &[Point3<f32>]) -> Vec<Option<Fpfh>> {
-        let index = KdIndex::new(points).expect("non-empty");
+        let index = PointIndex::new(points).expect("non-empty");
         let normals = pca_normals(points, &index, 0.08);
         fpfh_descriptors(points, &normals, &index, 0.2)
     }

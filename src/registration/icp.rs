@@ -8,7 +8,7 @@
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
 
 use super::horn::weighted_rigid;
-use super::kd::KdIndex;
+use crate::nearest::PointIndex;
 
 /// Parameters of [`icp_point_to_point`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -35,7 +35,7 @@ pub struct IcpResult {
 pub fn icp_point_to_point(
     source: &[Point3<f32>],
     template: &[Point3<f32>],
-    template_index: &KdIndex,
+    template_index: &PointIndex,
     initial: Isometry3<f64>,
     params: &IcpParams,
 ) -> IcpResult {
@@ -99,7 +99,7 @@ mod tests {
             .iter()
             .map(|q| (truth.inverse() * q.cast::<f64>()).cast())
             .collect();
-        let index = KdIndex::new(&template).expect("non-empty");
+        let index = PointIndex::new(&template).expect("non-empty");
         let params = IcpParams {
             max_correspondence_m: 0.03,
             max_iterations: 100,

@@ -7,7 +7,7 @@
 //!   FPFH descriptors ([`fpfh`], normals from [`normals`]) matched by mutual nearest neighbours;
 //! - the TEASER++ back end without scale ([`teaser`]): pairwise-length [`consistency`] graph,
 //!   [`max_clique`], [`gnc_tls`] rotation, [`scalar_tls`] translation;
-//! - point-to-point [`icp`] refinement over a kiddo k-d tree ([`kd`]);
+//! - point-to-point [`icp`] refinement over a kiddo k-d tree ([`crate::nearest::PointIndex`]);
 //! - the 24 [`cube_rotations`] as initial orientations, scored by the scale-normalised one-way
 //!   [`chamfer`] distance.
 //!
@@ -22,7 +22,6 @@ pub mod fpfh;
 pub mod gnc_tls;
 pub mod horn;
 pub mod icp;
-pub mod kd;
 pub mod max_clique;
 pub mod normals;
 pub mod register;

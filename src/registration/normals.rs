@@ -6,10 +6,10 @@
 
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 
-use super::kd::KdIndex;
+use crate::nearest::PointIndex;
 
 /// Unit normal per point, or `None` where fewer than 3 points lie within `radius_m`.
-pub fn pca_normals(points: &[Point3<f32>], index: &KdIndex, radius_m: f32) -> Vec<Option<Vector3<f32>>> {
+pub fn pca_normals(points: &[Point3<f32>], index: &PointIndex, radius_m: f32) -> Vec<Option<Vector3<f32>>> {
     if points.is_empty() {
         return Vec::new();
     }
@@ -57,7 +57,7 @@ mod tests {
             .map(|i| Point3::new((i % 10) as f32 * 0.1, (i / 10) as f32 * 0.1, 1.0))
             .collect();
         points.push(Point3::new(0.45, 0.45, -5.0));
-        let index = KdIndex::new(&points).expect("non-empty");
+        let index = PointIndex::new(&points).expect("non-empty");
         let normals = pca_normals(&points, &index, 0.25);
         for n in &normals[..100] {
             let n = n.expect("grid points have neighbours");

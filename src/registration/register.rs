@@ -12,11 +12,11 @@ use super::consistency::{Correspondence, all_to_all_pairs};
 use super::cube_rotations::cube_rotations;
 use super::fpfh::{fpfh_descriptors, mutual_nearest_neighbours};
 use super::icp::{IcpParams, icp_point_to_point};
-use super::kd::KdIndex;
 use super::normals::pca_normals;
 use super::teaser::{RobustEstimate, robust_registration};
 use super::{FrontEnd, RegistrationConfig};
 use crate::error::{CatmapError, Result};
+use crate::nearest::PointIndex;
 
 /// The best alignment of a source cloud to a template: p_in_template ≈ rotation·p_in_source +
 /// translation.
@@ -170,7 +170,7 @@ fn register_candidate(
         UnitQuaternion::from_rotation_matrix(&estimate.rotation),
     );
     let template_icp = rotate(&clouds.template_icp);
-    let index = KdIndex::new(&template_icp)?;
+    let index = PointIndex::new(&template_icp)?;
     let params = IcpParams {
         max_correspondence_m: cfg.icp_max_correspondence_m,
         max_iterations: cfg.icp_max_iterations,
@@ -197,7 +197,7 @@ pub fn front_end_correspondences<R: Rng + ?Sized>(
         FrontEnd::AllToAll => Ok(all_to_all_pairs(source.len(), template.len(), cfg.max_pairs, rng)),
         FrontEnd::Fpfh => {
             let describe = |points: &[Point3<f32>]| -> Result<_> {
-                let index = KdIndex::new(points)?;
+                let index = PointIndex::new(points)?;
                 let normals = pca_normals(points, &index, cfg.fpfh_normal_radius_voxels * cfg.voxel_m);
                 Ok(fpfh_descriptors(
                     points,
