@@ -135,6 +135,21 @@ impl OccupancyField {
             .concat()
     }
 
+    /// α at world `points` for a field whose coordinates start at `origin` (world − origin).
+    pub fn eval_alpha_world(&self, origin: &nalgebra::Point3<f32>, points: &[nalgebra::Point3<f32>]) -> Vec<f32> {
+        self.eval_alpha(&relative_to(origin, points))
+    }
+
+    /// Occupancy at world `points` for a field whose coordinates start at `origin`.
+    pub fn eval_occupancy_world(&self, origin: &nalgebra::Point3<f32>, points: &[nalgebra::Point3<f32>]) -> Vec<f32> {
+        self.eval_occupancy(&relative_to(origin, points))
+    }
+
+    /// Occupancy and colour at world `points` for a field whose coordinates start at `origin`.
+    pub fn eval_world(&self, origin: &nalgebra::Point3<f32>, points: &[nalgebra::Point3<f32>]) -> FieldEval {
+        self.eval(&relative_to(origin, points))
+    }
+
     /// Renders each ray of `rays` (forward only).
     pub fn render_rays(&self, rays: &RaySamples) -> Result<Vec<RayRender>> {
         rays.validate()?;
@@ -174,4 +189,9 @@ impl OccupancyField {
             })
             .collect()
     }
+}
+
+/// `points − origin` as plain arrays, the field's input.
+fn relative_to(origin: &nalgebra::Point3<f32>, points: &[nalgebra::Point3<f32>]) -> Vec<[f32; 3]> {
+    points.iter().map(|p| (p - origin.coords).coords.into()).collect()
 }

@@ -16,14 +16,11 @@ pub fn mesh_occupancy_field(
     frame: &ObjectFrame,
     config: &ObjectMeshConfig,
 ) -> Result<TriangleMesh> {
-    let local = |points: &[Point3<f32>]| -> Vec<[f32; 3]> {
-        points.iter().map(|p| (p - field_origin.coords).coords.into()).collect()
-    };
-    let mut mesh = extract_object_mesh(frame, config, |points| field.eval_occupancy(&local(points)))?;
+    let mut mesh = extract_object_mesh(frame, config, |points| field.eval_occupancy_world(field_origin, points))?;
     if !mesh.is_empty() {
         paint_vertices(&mut mesh, |points| {
             field
-                .eval(&local(points))
+                .eval_world(field_origin, points)
                 .colour
                 .iter()
                 .map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8))

@@ -21,6 +21,7 @@ use crate::resources::{Fields, ObjectIndex, Settings, StageTimes};
 struct Ready {
     entity: Entity,
     id: ObjectId,
+    cloud_len: usize,
     cloud: Vec<Point3<f32>>,
     bounds: catmap::oriented_box::OrientedBox,
     slot: FieldSlot,
@@ -62,7 +63,8 @@ pub fn register_categories(
             ready.push(Ready {
                 entity: index.0[&object.id],
                 id: object.id,
-                cloud: cloud.0.points(),
+                cloud_len: cloud.0.len(),
+                cloud: Vec::new(), // filled only when the class is due
                 bounds: bounds.oriented_box,
                 slot: *slot,
             });
@@ -79,6 +81,11 @@ pub fn register_categories(
                 })
         });
         if stale {
+            for r in &mut ready {
+                if let Ok((_, cloud, ..)) = objects.get(r.entity) {
+                    r.cloud = cloud.0.points();
+                }
+            }
             due.push((entity, category.class, ready));
         }
     }
@@ -95,16 +102,12 @@ pub fn register_categories(
                 .map(|r| {
                     let field = fields.objects.field(r.slot.index)?;
                     let mut rng = seeded_rng(seed, RngStream::ObjectField(r.id));
-                    let origin = r.slot.origin.coords;
                     Some(object_reliability(
                         &r.bounds.center(),
                         &r.bounds.half_extents,
                         &cfg.uncertainty,
                         &mut rng,
-                        |points| {
-                            let local: Vec<[f32; 3]> = points.iter().map(|p| (p - origin).coords.into()).collect();
-                            field.eval_alpha(&local)
-                        },
+                        |points| field.eval_alpha_world(&r.slot.origin, points),
                     ))
                 })
                 .collect()
@@ -151,7 +154,7 @@ pub fn register_categories(
             .map(|g| (g.representative, g.members.keys().copied().collect()))
             .collect();
         tracing::info!(class = %class, subcategories = ?summary, "class registered");
-        let registered_points: BTreeMap<ObjectId, usize> = ready.iter().map(|r| (r.id, r.cloud.len())).collect();
+        let registered_points: BTreeMap<ObjectId, usize> = ready.iter().map(|r| (r.id, r.cloud_len)).collect();
         let record = Subcategories {
             groups,
             registered_points,
