@@ -52,6 +52,15 @@ pub struct ObjectFrame {
 }
 
 impl ObjectFrame {
+    /// The metric, axis-aligned frame of world bounds (scale 1), e.g. the background's cloud.
+    pub fn from_aabb(bounds: &crate::mesh::Aabb) -> Self {
+        let pose = nalgebra::Isometry3::translation(bounds.center().x, bounds.center().y, bounds.center().z);
+        Self {
+            world_from_object: Similarity3::from_isometry(pose, 1.0),
+            extents: bounds.extent(),
+        }
+    }
+
     /// The metric frame of an oriented box (scale 1).
     pub fn from_oriented_box(b: &OrientedBox) -> Self {
         Self {

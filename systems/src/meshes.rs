@@ -4,7 +4,6 @@ use bevy_ecs::prelude::*;
 use catmap::FrameIndex;
 use catmap::mesh::{Aabb, TriangleMesh};
 use catmap::meshing::{MapMeshes, ObjectFrame, ObjectMeshConfig, mesh_occupancy_field};
-use nalgebra::{Isometry3, Similarity3, Translation3};
 use rayon::prelude::*;
 
 use crate::components::{Background, FieldLoss, FieldMesh, FieldSlot, Object, ObjectBounds, ObjectCloud};
@@ -89,12 +88,7 @@ fn mesh_fields(
     work.par_iter()
         .filter_map(|&(entity, object, is_background, slot, loss, bounds, cloud)| {
             let (field, frame, config) = if is_background {
-                let bounds = Aabb::from_points(cloud.0.points().iter())?;
-                let pose = Isometry3::from_parts(Translation3::from(bounds.center().coords), Default::default());
-                let frame = ObjectFrame {
-                    world_from_object: Similarity3::from_isometry(pose, 1.0),
-                    extents: bounds.extent(),
-                };
+                let frame = ObjectFrame::from_aabb(&Aabb::from_points(cloud.0.points().iter())?);
                 (fields.background.field(slot.index)?, frame, background_config)
             } else {
                 let frame = ObjectFrame::from_oriented_box(&bounds?.oriented_box);
