@@ -1,6 +1,6 @@
 //! Seeded random generators: every random choice in catmap draws from one of these.
 
-use rand::SeedableRng;
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::ids::ObjectId;
@@ -35,6 +35,20 @@ pub fn seeded_rng(seed: u64, stream: RngStream) -> ChaCha8Rng {
         RngStream::ObjectField(ObjectId(id)) => FIELD_STREAMS + 2 + u64::from(id),
     });
     rng
+}
+
+/// One N(0, 1) draw in double precision (Box–Muller; consumes two `f64` draws).
+pub fn standard_normal_f64<R: rand::Rng + ?Sized>(rng: &mut R) -> f64 {
+    let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
+    let u2: f64 = rng.random::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// One N(0, 1) draw in single precision (Box–Muller; consumes two `f32` draws).
+pub fn standard_normal_f32<R: rand::Rng + ?Sized>(rng: &mut R) -> f32 {
+    let u1 = 1.0 - rng.random::<f32>(); // (0, 1]
+    let u2: f32 = rng.random();
+    (-2.0 * u1.ln()).sqrt() * (std::f32::consts::TAU * u2).cos()
 }
 
 #[cfg(test)]

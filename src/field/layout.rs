@@ -167,12 +167,7 @@ impl ParamLayout {
     }
 }
 
-/// One N(0, 1) draw (Box–Muller).
-fn standard_normal(rng: &mut impl Rng) -> f64 {
-    let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
-    let u2: f64 = rng.random::<f64>();
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-}
+use crate::rng::standard_normal_f64 as standard_normal;
 
 #[cfg(test)]
 mod tests {

@@ -205,12 +205,7 @@ fn stratified(near: f32, far: f32, n: usize, rng: &mut impl Rng, z: &mut Vec<f32
     }
 }
 
-/// A standard normal draw (Box–Muller).
-fn standard_normal(rng: &mut impl Rng) -> f32 {
-    let u1 = 1.0 - rng.random::<f32>(); // (0, 1]
-    let u2: f32 = rng.random();
-    (-2.0 * u1.ln()).sqrt() * (std::f32::consts::TAU * u2).cos()
-}
+use crate::rng::standard_normal_f32 as standard_normal;
 
 #[cfg(test)]
 mod tests {

@@ -164,6 +164,20 @@ impl TriangleMesh {
 
     /// `count` points drawn uniformly over the surface with `rng`. Errors when the mesh has no area.
     pub fn sample_surface<R: Rng + ?Sized>(&self, count: usize, rng: &mut R) -> Result<Vec<Point3<f32>>> {
+        Ok(self
+            .sample_surface_oriented(count, rng)?
+            .into_iter()
+            .map(|(p, _)| p)
+            .collect())
+    }
+
+    /// Like [`Self::sample_surface`] (the same draws), each point with the unit normal of its
+    /// triangle (right-hand rule over the triangle's corner order).
+    pub fn sample_surface_oriented<R: Rng + ?Sized>(
+        &self,
+        count: usize,
+        rng: &mut R,
+    ) -> Result<Vec<(Point3<f32>, Vector3<f32>)>> {
         let cumulative: Vec<f64> = (0..self.triangles.len())
             .scan(0.0, |acc, t| {
                 *acc += f64::from(self.triangle_area(t));
@@ -184,7 +198,9 @@ impl TriangleMesh {
                 let t = cumulative.partition_point(|&c| c <= target).min(last);
                 let [a, b, c] = self.corners(t);
                 let (r1, r2) = (rng.random::<f32>().sqrt(), rng.random::<f32>());
-                Point3::from(a.coords * (1.0 - r1) + b.coords * (r1 * (1.0 - r2)) + c.coords * (r1 * r2))
+                let p = Point3::from(a.coords * (1.0 - r1) + b.coords * (r1 * (1.0 - r2)) + c.coords * (r1 * r2));
+                let normal = (b - a).cross(&(c - a)).try_normalize(0.0).unwrap_or_else(Vector3::z);
+                (p, normal)
             })
             .collect();
         Ok(points)

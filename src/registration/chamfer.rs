@@ -30,6 +30,26 @@ pub fn normalised_one_way_chamfer(from: &[Point3<f32>], to: &[Point3<f32>]) -> R
     Ok(one_way_chamfer(from, to)? / scale)
 }
 
+/// Trimmed one-way Chamfer: the mean of the smallest fraction ρ of the distances from each
+/// point of `from` to the set `index` was built over, divided by s(`from`). Robust to the
+/// outliers of a segmented cloud; ranks registration candidates.
+pub fn trimmed_normalised_chamfer(from: &[Point3<f32>], index: &PointIndex, keep_fraction: f32) -> f32 {
+    let mut d = index.nearest_distances(from);
+    let keep = super::icp::kept_count(d.len(), keep_fraction);
+    if keep == 0 {
+        return f32::INFINITY;
+    }
+    if keep < d.len() {
+        d.select_nth_unstable_by(keep, f32::total_cmp);
+    }
+    let sum: f64 = d[..keep].iter().map(|&x| f64::from(x)).sum();
+    let scale = half_max_extent(from);
+    if !(scale > 0.0) {
+        return f32::INFINITY;
+    }
+    (sum / keep as f64) as f32 / scale
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -57,5 +77,18 @@ mod tests {
     #[test]
     fn a_cloud_without_extent_has_no_normalised_score() {
         assert!(normalised_one_way_chamfer(&[Point3::origin()], &[Point3::origin()]).is_err());
+    }
+
+    #[test]
+    fn trimming_ignores_the_farthest_points() {
+        // 4 points on a 2 m line (scale 1) at distance 0.1 from Q, one at 10 m: trimmed at 0.8
+        // the score is 0.1, untrimmed it is (4·0.1 + 10)/5.
+        let q: Vec<_> = (0..=20).map(|i| Point3::new(i as f32 * 0.1, 0.0, 0.0)).collect();
+        let mut p: Vec<_> = (0..4).map(|i| Point3::new(i as f32 * 0.5, 0.1, 0.0)).collect();
+        p.push(Point3::new(2.0, 10.0, 0.0));
+        let index = PointIndex::new(&q).unwrap();
+        let scale = half_max_extent(&p);
+        assert!((trimmed_normalised_chamfer(&p, &index, 0.8) - 0.1 / scale).abs() < 1e-5);
+        assert!((trimmed_normalised_chamfer(&p, &index, 1.0) - 10.4 / 5.0 / scale).abs() < 1e-4);
     }
 }

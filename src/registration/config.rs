@@ -42,6 +42,36 @@ pub struct RegistrationConfig {
     pub icp_max_correspondence_m: f32,
     /// ICP: most iterations.
     pub icp_max_iterations: usize,
+    /// Seed one extra candidate with the front end + TEASER++ back end estimate (computed once:
+    /// with all-to-all pairs it does not depend on the initial rotation).
+    pub robust_start: bool,
+    /// Edge of the voxel grid of the clouds every start is first refined on, metres.
+    pub search_voxel_m: f32,
+    /// Trimmed-ICP gates of the coarse stages every start runs, metres (one stage per gate).
+    pub search_gates_m: Vec<f32>,
+    /// Most iterations of each coarse stage.
+    pub search_iterations: usize,
+    /// Trimmed ICP and candidate ranking: fraction of the closest pairs kept.
+    pub keep_fraction: f32,
+    /// Candidates (best coarse scores, one per distinct pose) refined on the fine clouds.
+    pub refined_candidates: usize,
+    /// Trimmed-ICP gates of the fine stages, metres, before the final plain ICP.
+    pub refine_gates_m: Vec<f32>,
+    /// Most iterations of each fine stage.
+    pub refine_iterations: usize,
+    /// Extra starts per cube rotation: the cube rotation composed with a turn of
+    /// `twist_deg` about ±x, ±y, ±z (0 or 6).
+    pub twists: usize,
+    /// Angle of the twists, degrees.
+    pub twist_deg: f32,
+    /// Start centres: grid cells along the template box's longest side (0: centroid only).
+    pub translation_grid: usize,
+    /// Source points (a stride subset of the coarse source) that rank the starts.
+    pub ranking_points: usize,
+    /// Translation-only trimmed ICP steps every start takes before it is ranked.
+    pub translation_iterations: usize,
+    /// Best-ranked starts that run the coarse trimmed ICP.
+    pub ranked_starts: usize,
     /// FPFH: radius of the PCA neighbourhood of a normal, in voxels (`voxel_m`).
     pub fpfh_normal_radius_voxels: f32,
     /// FPFH: radius of the descriptor's neighbourhood, in voxels (`voxel_m`).
@@ -59,9 +89,23 @@ impl Default for RegistrationConfig {
             gnc_factor: 1.4,
             gnc_max_iterations: 100,
             gnc_cost_threshold: 1e-6,
-            icp_voxel_m: 0.1,
+            icp_voxel_m: 0.02,
             icp_max_correspondence_m: 0.01,
             icp_max_iterations: 100,
+            robust_start: false,
+            search_voxel_m: 0.05,
+            search_gates_m: vec![0.3, 0.1],
+            search_iterations: 20,
+            keep_fraction: 0.8,
+            refined_candidates: 3,
+            refine_gates_m: vec![0.05, 0.025],
+            refine_iterations: 30,
+            twists: 6,
+            twist_deg: 30.0,
+            translation_grid: 0,
+            ranking_points: 64,
+            ranked_starts: 48,
+            translation_iterations: 5,
             fpfh_normal_radius_voxels: 2.0,
             fpfh_feature_radius_voxels: 5.0,
         }

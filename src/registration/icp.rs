@@ -1,7 +1,9 @@
-//! Point-to-point ICP (Besl & McKay) with a correspondence gate.
+//! Point-to-point ICP (Besl & McKay) with a correspondence gate and optional trimming (TrICP,
+//! Chetverikov et al. 2002).
 //!
 //! Iteration k: for each source point p_i, its nearest template point q_i under the current
-//! transform T_k; pairs with |T_k p_i − q_i| ≤ d_max are kept, and
+//! transform T_k; pairs with |T_k p_i − q_i| ≤ d_max are kept, of those only the fraction ρ
+//! with the smallest distances (ρ = 1: all), and
 //! T_{k+1} = argmin_T Σ |q_i − T p_i|² (closed form, [`weighted_rigid`]). Stops after
 //! `max_iterations`, when fewer than 3 pairs remain, or when the transform stops changing.
 
@@ -17,6 +19,8 @@ pub struct IcpParams {
     pub max_correspondence_m: f32,
     /// Most iterations.
     pub max_iterations: usize,
+    /// Fraction ρ ∈ (0, 1] of the gated pairs kept, the closest first (1 = plain ICP).
+    pub keep_fraction: f32,
 }
 
 /// Outcome of [`icp_point_to_point`].
@@ -48,14 +52,26 @@ pub fn icp_point_to_point(
     };
     for iteration in 0..params.max_iterations {
         let moved: Vec<Point3<f32>> = source.iter().map(|p| (current * p.cast::<f64>()).cast()).collect();
-        let (mut a, mut b) = (Vec::new(), Vec::new());
-        for (p, moved_p) in source.iter().zip(&moved) {
-            let (j, d2) = template_index.nearest(moved_p);
-            if d2 <= max_d2 {
-                a.push(p.coords.cast::<f64>());
-                b.push(template[j].coords.cast::<f64>());
-            }
+        let mut pairs: Vec<(f32, usize, usize)> = source
+            .iter()
+            .zip(&moved)
+            .enumerate()
+            .filter_map(|(i, (_, moved_p))| {
+                let (j, d2) = template_index.nearest(moved_p);
+                (d2 <= max_d2).then_some((d2, i, j))
+            })
+            .collect();
+        let keep = kept_count(pairs.len(), params.keep_fraction);
+        if keep < pairs.len() {
+            pairs.select_nth_unstable_by(keep, |x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+            pairs.truncate(keep);
+            pairs.sort_unstable_by_key(|&(_, i, _)| i);
         }
+        let a: Vec<_> = pairs.iter().map(|&(_, i, _)| source[i].coords.cast::<f64>()).collect();
+        let b: Vec<_> = pairs
+            .iter()
+            .map(|&(_, _, j)| template[j].coords.cast::<f64>())
+            .collect();
         result.correspondences = a.len();
         if a.len() < 3 {
             break;
@@ -74,6 +90,15 @@ pub fn icp_point_to_point(
     }
     result.template_from_source = current;
     result
+}
+
+/// How many of `n` gated pairs a keep fraction ρ retains (at least 3 when there are 3).
+pub fn kept_count(n: usize, keep_fraction: f32) -> usize {
+    // The small slack keeps an f32 fraction such as 0.8 (0.800000012) from rounding 8 up to 9.
+    let keep = (n as f64 * f64::from(keep_fraction.clamp(0.0, 1.0)) - 1e-4)
+        .ceil()
+        .max(0.0) as usize;
+    keep.max(n.min(3)).min(n)
 }
 
 #[cfg(test)]
@@ -103,6 +128,7 @@ mod tests {
         let params = IcpParams {
             max_correspondence_m: 0.03,
             max_iterations: 100,
+            keep_fraction: 1.0,
         };
         let fit = icp_point_to_point(&source, &template, &index, Isometry3::identity(), &params);
         let error = fit.template_from_source * truth.inverse();
@@ -117,5 +143,46 @@ mod tests {
             error.rotation.angle()
         );
         assert_eq!(fit.correspondences, 1000, "every point matched at the end");
+    }
+
+    #[test]
+    fn trimming_ignores_a_cluster_of_outliers_that_biases_plain_icp() {
+        let template: Vec<Point3<f32>> = (0..400)
+            .map(|i| {
+                Point3::new(
+                    (i % 20) as f32 * 0.05,
+                    (i / 20) as f32 * 0.05,
+                    0.02 * ((i % 7) as f32).sin(),
+                )
+            })
+            .collect();
+        let truth = Isometry3::new(Vector3::new(0.02, 0.01, 0.0), Vector3::new(0.0, 0.0, 0.03));
+        let mut source: Vec<Point3<f32>> = template
+            .iter()
+            .map(|q| (truth.inverse() * q.cast::<f64>()).cast())
+            .collect();
+        // 15 % outliers 8 cm above one corner, inside a wide gate.
+        source.extend((0..60).map(|i| Point3::new((i % 8) as f32 * 0.02, (i / 8) as f32 * 0.02, 0.08)));
+        let index = PointIndex::new(&template).unwrap();
+        let run = |keep_fraction| {
+            let params = IcpParams {
+                max_correspondence_m: 0.5,
+                max_iterations: 100,
+                keep_fraction,
+            };
+            let fit = icp_point_to_point(&source, &template, &index, Isometry3::identity(), &params);
+            (fit.template_from_source * truth.inverse()).translation.vector.norm()
+        };
+        assert!(run(1.0) > 5e-3, "the outliers pull plain ICP off");
+        assert!(run(0.8) < 1e-3, "trimmed ICP recovers the truth");
+    }
+
+    #[test]
+    fn kept_count_rounds_up_and_keeps_at_least_three() {
+        assert_eq!(kept_count(10, 0.8), 8);
+        assert_eq!(kept_count(10, 0.81), 9);
+        assert_eq!(kept_count(4, 0.1), 3);
+        assert_eq!(kept_count(2, 0.5), 2);
+        assert_eq!(kept_count(0, 0.5), 0);
     }
 }

@@ -1,21 +1,41 @@
-//! [`register_to_representative`]: the composition of METHOD.md §4 (24 initial rotations ×
-//! front end → robust back end → ICP, scored by the normalised one-way Chamfer distance).
+//! [`register_to_representative`]: METHOD.md §4's registration of a partial object cloud to its
+//! representative, made robust to partial views and outliers.
+//!
+//! 1. Starts: the 24 [`cube_rotations`] (the rotation of start k is C_kᵀ, i.e. C_k applied to the
+//!    template), optionally each composed with `twists` turns, with the translation that aligns
+//!    the centroids; optionally one more start from the correspondence front end + TEASER++ back
+//!    end ([`robust_registration`]; rotation-independent, so computed once).
+//! 2. Coarse: every start runs trimmed ICP ([`icp_point_to_point`] with ρ = `keep_fraction`) at
+//!    the `search_gates_m` on clouds thinned to `search_voxel_m`, and is ranked by the trimmed
+//!    normalised one-way Chamfer distance ([`trimmed_normalised_chamfer`]).
+//! 3. Fine: the `refined_candidates` best distinct poses run trimmed ICP at the `refine_gates_m`
+//!    and then METHOD's plain ICP (gate `icp_max_correspondence_m`) on clouds thinned to
+//!    `icp_voxel_m`; the best trimmed score wins (ties: lowest start index).
+//! 4. The reported score is METHOD's normalised one-way Chamfer distance of the whole aligned
+//!    source to the whole template (the subcategory rule's input).
+//!
+//! Why not METHOD's pipeline alone: with all-to-all pairs of clouds thinned at 0.1 m, the voxel
+//! centroids of two different samplings of one surface differ by several centimetres, so the
+//! consistency graph at a 1 cm noise bound keeps a clique of only ~15 pairs out of millions of
+//! edges (13–16 s per candidate) and the estimate is often wrong; with the 24 rotations the
+//! all-to-all result is the same for every rotation anyway. Multi-start trimmed ICP is fast
+//! (tens of ms per pair) and meets the trials in `tests/registration_trials.rs`.
 
-use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::chamfer::normalised_one_way_chamfer;
+use super::chamfer::{normalised_one_way_chamfer, trimmed_normalised_chamfer};
 use super::cloud::{check_cloud, voxel_centroids};
 use super::consistency::{Correspondence, all_to_all_pairs};
 use super::cube_rotations::cube_rotations;
 use super::fpfh::{fpfh_descriptors, mutual_nearest_neighbours};
 use super::icp::{IcpParams, icp_point_to_point};
 use super::normals::pca_normals;
-use super::teaser::{RobustEstimate, robust_registration};
+use super::teaser::robust_registration;
 use super::{FrontEnd, RegistrationConfig};
-use crate::error::{CatmapError, Result};
+use crate::error::Result;
 use crate::nearest::PointIndex;
 
 /// The best alignment of a source cloud to a template: p_in_template ≈ rotation·p_in_source +
@@ -28,9 +48,9 @@ pub struct Registration {
     pub translation: Vector3<f32>,
     /// Normalised one-way Chamfer distance CD(aligned source → template) / s(source).
     pub score: f32,
-    /// Which of the 24 [`cube_rotations`] the best candidate started from.
-    pub initial_rotation_index: usize,
-    /// Diagnostics of every candidate, in initial-rotation order.
+    /// Which start won (see [`RegistrationTrace::starts`]).
+    pub start_index: usize,
+    /// Diagnostics.
     pub trace: RegistrationTrace,
 }
 
@@ -44,37 +64,40 @@ impl Registration {
     }
 }
 
-/// What each of the 24 candidates did.
+/// What the search did.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RegistrationTrace {
-    /// Points of the downsampled source and template the front end worked on.
-    pub downsampled_points: (usize, usize),
-    /// Per initial rotation: the candidate's diagnostics, or why it failed.
-    pub candidates: Vec<std::result::Result<CandidateTrace, String>>,
+    /// Points of the coarse source and template.
+    pub coarse_points: (usize, usize),
+    /// Points of the fine source and template.
+    pub fine_points: (usize, usize),
+    /// Starts tried: 24·(1 + twists), plus one when the robust start succeeded.
+    pub starts: usize,
+    /// The robust start's diagnostics, or why it failed (None when not configured).
+    pub robust: Option<std::result::Result<RobustTrace, String>>,
+    /// Trimmed coarse score of every start, in start order.
+    pub coarse_scores: Vec<f32>,
+    /// (start index, trimmed fine score) of every refined candidate, best first.
+    pub refined: Vec<(usize, f32)>,
 }
 
-/// Diagnostics of one candidate.
+/// Diagnostics of the front end + TEASER++ back end.
 #[derive(Debug, Clone, PartialEq)]
-pub struct CandidateTrace {
+pub struct RobustTrace {
     /// Putative correspondences.
     pub correspondences: usize,
     /// Size of the maximum clique.
     pub clique_size: usize,
     /// Whether the clique is proven maximum.
     pub clique_proven_maximum: bool,
-    /// ICP iterations.
-    pub icp_iterations: usize,
-    /// Normalised one-way Chamfer score.
-    pub score: f32,
 }
 
 /// Registers `source` (a partial, noisy object cloud) to `template` (the representative's
-/// cloud), trying each of the 24 cube rotations R₀ applied to the template, and keeps the
-/// candidate with the smallest normalised one-way Chamfer score (ties: lowest index).
+/// cloud) by the multi-start search of the module doc.
 ///
-/// Candidate k draws its randomness from a ChaCha8 stream k of one seed drawn from `rng`, so the
+/// Randomness (the front end's pair subsample) comes from one seed drawn from `rng`, so the
 /// result does not depend on thread scheduling. Errors on degenerate clouds (fewer than 3 points,
-/// non-finite coordinates, no extent) or when every candidate fails.
+/// non-finite coordinates, no extent).
 pub fn register_to_representative<R: Rng + ?Sized>(
     source: &[Point3<f32>],
     template: &[Point3<f32>],
@@ -84,106 +107,249 @@ pub fn register_to_representative<R: Rng + ?Sized>(
     check_cloud(source, "source", 3)?;
     check_cloud(template, "template", 3)?;
     let seed: u64 = rng.random();
-    let clouds = Clouds {
-        source: voxel_centroids(source, cfg.voxel_m)?,
-        template: voxel_centroids(template, cfg.voxel_m)?,
-        source_icp: voxel_centroids(source, cfg.icp_voxel_m)?,
-        template_icp: voxel_centroids(template, cfg.icp_voxel_m)?,
+    let coarse = Level::new(source, template, cfg.search_voxel_m)?;
+    let fine = Level::new(source, template, cfg.icp_voxel_m)?;
+    let mut starts = ranked_starts(&coarse, cfg);
+    let robust = cfg.robust_start.then(|| robust_start(source, template, cfg, seed));
+    if let Some(Ok((pose, _))) = &robust {
+        starts.push(*pose);
+    }
+    let stage = |gate: f32, iterations: usize| IcpParams {
+        max_correspondence_m: gate,
+        max_iterations: iterations,
+        keep_fraction: cfg.keep_fraction,
     };
-    let candidates: Vec<Result<(Isometry3<f64>, CandidateTrace)>> = cube_rotations()
+    let coarse_fits: Vec<(Isometry3<f64>, f32)> = starts
         .par_iter()
-        .enumerate()
-        .map(|(k, initial)| {
-            let mut candidate_rng = ChaCha8Rng::seed_from_u64(seed);
-            candidate_rng.set_stream(k as u64);
-            let rotated = Isometry3::from_parts(
-                Translation3::identity(),
-                UnitQuaternion::from_rotation_matrix(&initial.cast::<f64>()),
-            );
-            let (rotated_from_source, mut trace) = register_candidate(&clouds, &rotated, cfg, &mut candidate_rng)?;
-            let template_from_source = rotated.inverse() * rotated_from_source;
-            let aligned: Vec<Point3<f32>> = source
-                .iter()
-                .map(|p| (template_from_source * p.cast()).cast())
-                .collect();
-            trace.score = normalised_one_way_chamfer(&aligned, template)?;
-            Ok((template_from_source, trace))
+        .map(|start| {
+            let pose = cfg.search_gates_m.iter().fold(*start, |pose, &gate| {
+                coarse.refine(pose, &stage(gate, cfg.search_iterations))
+            });
+            (pose, coarse.score(&pose, cfg.keep_fraction))
         })
         .collect();
-    let best = candidates
-        .iter()
-        .enumerate()
-        .filter_map(|(k, c)| c.as_ref().ok().map(|(pose, trace)| (k, pose, trace.score)))
-        .min_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)));
-    let Some((index, pose, score)) = best else {
-        let reason = candidates
-            .iter()
-            .find_map(|c| c.as_ref().err())
-            .map(ToString::to_string);
-        return Err(CatmapError::Degenerate(format!(
-            "all 24 registration candidates failed; the first because: {}",
-            reason.unwrap_or_default()
-        )));
+    let chosen = distinct_best(&coarse_fits, cfg.refined_candidates.max(1));
+    let final_stage = IcpParams {
+        max_correspondence_m: cfg.icp_max_correspondence_m,
+        max_iterations: cfg.icp_max_iterations,
+        keep_fraction: 1.0,
     };
+    let mut refined: Vec<(usize, Isometry3<f64>, f32)> = chosen
+        .par_iter()
+        .map(|&k| {
+            let pose = cfg.refine_gates_m.iter().fold(coarse_fits[k].0, |pose, &gate| {
+                fine.refine(pose, &stage(gate, cfg.refine_iterations))
+            });
+            let pose = fine.refine(pose, &final_stage);
+            (k, pose, fine.score(&pose, cfg.keep_fraction))
+        })
+        .collect();
+    refined.sort_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)));
+    let (start_index, pose, _) = refined[0];
+    let aligned: Vec<Point3<f32>> = source.iter().map(|p| (pose * p.cast()).cast()).collect();
+    let score = normalised_one_way_chamfer(&aligned, template)?;
     Ok(Registration {
         rotation: pose.rotation.to_rotation_matrix().cast(),
         translation: pose.translation.vector.cast(),
         score,
-        initial_rotation_index: index,
+        start_index,
         trace: RegistrationTrace {
-            downsampled_points: (clouds.source.len(), clouds.template.len()),
-            candidates: candidates
-                .into_iter()
-                .map(|c| c.map(|(_, trace)| trace).map_err(|e| e.to_string()))
-                .collect(),
+            coarse_points: (coarse.source.len(), coarse.template.len()),
+            fine_points: (fine.source.len(), fine.template.len()),
+            starts: starts.len(),
+            robust: robust.map(|r| r.map(|(_, t)| t).map_err(|e| e.to_string())),
+            coarse_scores: coarse_fits.iter().map(|f| f.1).collect(),
+            refined: refined.iter().map(|r| (r.0, r.2)).collect(),
         },
     })
 }
 
-/// The downsampled clouds, shared by all candidates.
-struct Clouds {
+/// The source and template thinned to one voxel size, with the template indexed.
+struct Level {
     source: Vec<Point3<f32>>,
     template: Vec<Point3<f32>>,
-    source_icp: Vec<Point3<f32>>,
-    template_icp: Vec<Point3<f32>>,
+    index: PointIndex,
 }
 
-/// One candidate: registers the source to the template moved by `rotated_from_template`.
-/// Returns rotated_from_source.
-fn register_candidate(
-    clouds: &Clouds,
-    rotated_from_template: &Isometry3<f64>,
-    cfg: &RegistrationConfig,
-    rng: &mut ChaCha8Rng,
-) -> Result<(Isometry3<f64>, CandidateTrace)> {
-    let rotate = |points: &[Point3<f32>]| -> Vec<Point3<f32>> {
-        points
-            .iter()
-            .map(|p| (rotated_from_template * p.cast()).cast())
-            .collect()
+impl Level {
+    fn new(source: &[Point3<f32>], template: &[Point3<f32>], voxel_m: f32) -> Result<Self> {
+        let template = voxel_centroids(template, voxel_m)?;
+        Ok(Self {
+            source: voxel_centroids(source, voxel_m)?,
+            index: PointIndex::new(&template)?,
+            template,
+        })
+    }
+
+    fn refine(&self, pose: Isometry3<f64>, params: &IcpParams) -> Isometry3<f64> {
+        icp_point_to_point(&self.source, &self.template, &self.index, pose, params).template_from_source
+    }
+
+    fn score(&self, pose: &Isometry3<f64>, keep_fraction: f32) -> f32 {
+        let moved: Vec<Point3<f32>> = self.source.iter().map(|p| (pose * p.cast()).cast()).collect();
+        trimmed_normalised_chamfer(&moved, &self.index, keep_fraction)
+    }
+}
+
+fn centroid(points: &[Point3<f32>]) -> Vector3<f64> {
+    points.iter().map(|p| p.coords.cast::<f64>()).sum::<Vector3<f64>>() / points.len().max(1) as f64
+}
+
+/// Start rotations: C_kᵀ for the 24 cube rotations, each also composed with the `twists`.
+fn start_rotations(cfg: &RegistrationConfig) -> Vec<UnitQuaternion<f64>> {
+    let angle = f64::from(cfg.twist_deg).to_radians();
+    let mut twists = vec![UnitQuaternion::identity()];
+    if cfg.twists > 0 {
+        for axis in [Vector3::x(), Vector3::y(), Vector3::z()] {
+            for sign in [1.0, -1.0] {
+                twists.push(UnitQuaternion::from_axis_angle(
+                    &Unit::new_normalize(axis * sign),
+                    angle,
+                ));
+            }
+        }
+    }
+    cube_rotations()
+        .iter()
+        .flat_map(|cube| {
+            let base = UnitQuaternion::from_rotation_matrix(&cube.transpose().cast::<f64>());
+            twists.iter().map(move |twist| base * twist)
+        })
+        .collect()
+}
+
+/// Where the source's centroid may land in the template frame: the template's centroid and a
+/// grid over its box with `translation_grid` cells along the longest side (a partial view's
+/// centroid is not the whole object's).
+fn start_centres(template: &[Point3<f32>], cfg: &RegistrationConfig) -> Vec<Vector3<f64>> {
+    let mut centres = vec![centroid(template)];
+    let Some(bounds) = crate::mesh::Aabb::from_points(template) else {
+        return centres;
     };
-    let template = rotate(&clouds.template);
-    let correspondences = front_end_correspondences(&clouds.source, &template, cfg, rng)?;
-    let estimate: RobustEstimate = robust_registration(&clouds.source, &template, &correspondences, cfg)?;
-    let initial = Isometry3::from_parts(
+    let cells = cfg.translation_grid;
+    if cells == 0 {
+        return centres;
+    }
+    let step = bounds.extent().max() / cells as f32;
+    let counts = bounds.extent().map(|e| (e / step).floor() as usize + 1);
+    let offset = (bounds.extent() - counts.cast::<f32>().map(|c| (c - 1.0) * step)) / 2.0;
+    for i in 0..counts.x {
+        for j in 0..counts.y {
+            for k in 0..counts.z {
+                let cell = Vector3::new(i as f32, j as f32, k as f32) * step;
+                centres.push((bounds.min.coords + offset + cell).cast());
+            }
+        }
+    }
+    centres
+}
+
+/// Every start rotation × start centre, ranked by the trimmed score of a small subset of the
+/// coarse source without any refinement; the `ranked_starts` best (ties: enumeration order).
+fn ranked_starts(level: &Level, cfg: &RegistrationConfig) -> Vec<Isometry3<f64>> {
+    let rotations = start_rotations(cfg);
+    let centres = start_centres(&level.template, cfg);
+    let stride = level.source.len().div_ceil(cfg.ranking_points.max(3));
+    let subset: Vec<Point3<f32>> = level.source.iter().step_by(stride.max(1)).copied().collect();
+    let cs = centroid(&subset);
+    let poses: Vec<Isometry3<f64>> = rotations
+        .iter()
+        .flat_map(|r| {
+            centres
+                .iter()
+                .map(move |c| Isometry3::from_parts(Translation3::from(c - r * cs), *r))
+        })
+        .collect();
+    let fitted: Vec<(Isometry3<f64>, f32)> = poses
+        .par_iter()
+        .map(|pose| {
+            let pose = shift_translation(&subset, level, *pose, cfg);
+            let moved: Vec<Point3<f32>> = subset.iter().map(|p| (pose * p.cast()).cast()).collect();
+            (
+                pose,
+                trimmed_normalised_chamfer(&moved, &level.index, cfg.keep_fraction),
+            )
+        })
+        .collect();
+    let scores: Vec<f32> = fitted.iter().map(|f| f.1).collect();
+    let poses: Vec<Isometry3<f64>> = fitted.into_iter().map(|f| f.0).collect();
+    let mut order: Vec<usize> = (0..poses.len()).collect();
+    order.sort_by(|&a, &b| scores[a].total_cmp(&scores[b]).then(a.cmp(&b)));
+    order.truncate(cfg.ranked_starts.max(1));
+    order.into_iter().map(|k| poses[k]).collect()
+}
+
+/// `translation_iterations` translation-only trimmed ICP steps: the translation moves by the mean
+/// offset from each kept source point to its nearest template point.
+fn shift_translation(
+    subset: &[Point3<f32>],
+    level: &Level,
+    pose: Isometry3<f64>,
+    cfg: &RegistrationConfig,
+) -> Isometry3<f64> {
+    let mut pose = pose;
+    for _ in 0..cfg.translation_iterations {
+        let mut offsets: Vec<(f32, Vector3<f64>)> = subset
+            .iter()
+            .map(|p| {
+                let moved: Point3<f32> = (pose * p.cast()).cast();
+                let (j, d2) = level.index.nearest(&moved);
+                (d2, (level.template[j] - moved).cast())
+            })
+            .collect();
+        let keep = super::icp::kept_count(offsets.len(), cfg.keep_fraction);
+        if keep < offsets.len() {
+            offsets.select_nth_unstable_by(keep, |a, b| a.0.total_cmp(&b.0));
+        }
+        let shift = offsets[..keep].iter().map(|o| o.1).sum::<Vector3<f64>>() / keep.max(1) as f64;
+        pose.translation.vector += shift;
+    }
+    pose
+}
+
+/// The front end + TEASER++ back end estimate as one start (module doc, step 1).
+fn robust_start(
+    source: &[Point3<f32>],
+    template: &[Point3<f32>],
+    cfg: &RegistrationConfig,
+    seed: u64,
+) -> Result<(Isometry3<f64>, RobustTrace)> {
+    let source = voxel_centroids(source, cfg.voxel_m)?;
+    let template = voxel_centroids(template, cfg.voxel_m)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let correspondences = front_end_correspondences(&source, &template, cfg, &mut rng)?;
+    let estimate = robust_registration(&source, &template, &correspondences, cfg)?;
+    let pose = Isometry3::from_parts(
         Translation3::from(estimate.translation),
         UnitQuaternion::from_rotation_matrix(&estimate.rotation),
     );
-    let template_icp = rotate(&clouds.template_icp);
-    let index = PointIndex::new(&template_icp)?;
-    let params = IcpParams {
-        max_correspondence_m: cfg.icp_max_correspondence_m,
-        max_iterations: cfg.icp_max_iterations,
-    };
-    let refined = icp_point_to_point(&clouds.source_icp, &template_icp, &index, initial, &params);
-    let trace = CandidateTrace {
+    let trace = RobustTrace {
         correspondences: estimate.correspondences,
         clique_size: estimate.clique_size,
         clique_proven_maximum: estimate.clique_proven_maximum,
-        icp_iterations: refined.iterations,
-        score: f32::NAN,
     };
-    Ok((refined.template_from_source, trace))
+    Ok((pose, trace))
+}
+
+/// Indices of up to `count` fits with the smallest scores whose poses differ pairwise by more
+/// than 5° or 5 cm (ties: lower index first).
+fn distinct_best(fits: &[(Isometry3<f64>, f32)], count: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..fits.len()).collect();
+    order.sort_by(|&a, &b| fits[a].1.total_cmp(&fits[b].1).then(a.cmp(&b)));
+    let mut chosen: Vec<usize> = Vec::new();
+    for k in order {
+        let distinct = chosen.iter().all(|&c| {
+            let delta = fits[k].0 * fits[c].0.inverse();
+            delta.rotation.angle() > 5f64.to_radians() || delta.translation.vector.norm() > 0.05
+        });
+        if distinct {
+            chosen.push(k);
+            if chosen.len() == count {
+                break;
+            }
+        }
+    }
+    chosen
 }
 
 /// Putative correspondences between the downsampled clouds, by the configured front end.
