@@ -83,6 +83,35 @@ impl ParamLayout {
         layout
     }
 
+    /// Layout of the CodeNeRF-style category field (width `hidden`, code dimension `code_dim`),
+    /// with the module names of CodeNeRF's `model.py` (see [`super::category`]): `encoding.B`,
+    /// `encoding_xyz`, `shape_latent_layer_1`, `shape_layer_1`, `cat_latent_layer`, `cat_layer`
+    /// (columns `[y ‖ emb_geo]`), `shape_latent_layer_2`, `shape_layer_2`, `encoding_shape`,
+    /// `sigma`, `encoding_viewdir` (columns `[y ‖ emb_col]`), `texture_latent_layer_1`,
+    /// `texture_layer_1`, `rgb.0` (W/2 × W) and `rgb.2` (3 × W/2). The codes are not in it.
+    pub fn category(hidden: usize, code_dim: usize) -> Self {
+        let mut layout = Self {
+            tensors: Vec::new(),
+            len: 0,
+        };
+        layout.push("encoding.B", [NUM_DIRECTIONS, 3], 3, InitKind::Directions);
+        layout.push_linear("encoding_xyz", hidden, GEO_DIMS);
+        layout.push_linear("shape_latent_layer_1", hidden, code_dim);
+        layout.push_linear("shape_layer_1", hidden, hidden);
+        layout.push_linear("cat_latent_layer", hidden, code_dim);
+        layout.push_linear("cat_layer", hidden, hidden + GEO_DIMS);
+        layout.push_linear("shape_latent_layer_2", hidden, code_dim);
+        layout.push_linear("shape_layer_2", hidden, hidden);
+        layout.push_linear("encoding_shape", hidden, hidden);
+        layout.push_linear("sigma", 1, hidden);
+        layout.push_linear("encoding_viewdir", hidden, hidden + COL_DIMS);
+        layout.push_linear("texture_latent_layer_1", hidden, code_dim);
+        layout.push_linear("texture_layer_1", hidden, hidden);
+        layout.push_linear("rgb.0", hidden / 2, hidden);
+        layout.push_linear("rgb.2", 3, hidden / 2);
+        layout
+    }
+
     /// Layout of a plain MLP with layer widths `dims` (`dims[0]` inputs, `dims.last()` outputs).
     pub fn mlp(dims: &[usize]) -> Self {
         let mut layout = Self {
@@ -167,7 +196,7 @@ impl ParamLayout {
     }
 }
 
-use crate::rng::standard_normal_f64 as standard_normal;
+pub(crate) use crate::rng::standard_normal_f64 as standard_normal;
 
 #[cfg(test)]
 mod tests {
@@ -185,6 +214,12 @@ mod tests {
             layout.len(),
             "tensors are packed without gaps"
         );
+    }
+
+    #[test]
+    fn the_category_field_has_the_papers_18_179_parameters() {
+        // 18 116 weights and biases (four 32 → 32 code layers among them) + the 63 of B.
+        assert_eq!(ParamLayout::category(32, 32).len(), 18_179, "METHOD.md §5 / paper");
     }
 
     #[test]

@@ -20,10 +20,12 @@
 //! | `object_field`, `batch`, `tasks`, `samples` | fields, the batched step, its parallel plan |
 //! | `ray_sampler` | the depth-guided sampler: keyframes, pixels, depths along rays |
 //! | `tensors` | parameters as named candle tensors |
+//! | `category` | the CodeNeRF-style category field (shared weights, per-member codes), batched |
 //! | `mlp` | a plain MLP batch on the same machinery (benchmark shape) |
 
 mod adamw;
 mod batch;
+pub mod category;
 mod dense;
 mod directions;
 mod encoding;
@@ -43,6 +45,7 @@ mod tensors;
 
 pub use adamw::{AdamWConfig, AdamWState};
 pub use batch::{CHUNK_SAMPLES, FieldBatch};
+pub use category::{CategoryBatch, CategoryField, CategoryGradients, CategoryLosses, CategorySamples};
 pub use directions::{NUM_DIRECTIONS, icosphere_directions};
 pub use encoding::{COL_DIMS, EMB_DIMS, GEO_DIMS, NUM_BANDS, SIN_DIMS};
 pub use layout::{InitKind, ParamLayout, TensorSpec};

@@ -18,7 +18,7 @@ use super::samples::RaySamples;
 use crate::error::{CatmapError, Result};
 use crate::object_view::PixelState;
 
-fn ce(e: candle_core::Error) -> CatmapError {
+pub(crate) fn ce(e: candle_core::Error) -> CatmapError {
     CatmapError::Degenerate(format!("candle: {e}"))
 }
 
@@ -44,7 +44,7 @@ pub struct ReferenceOutput {
 }
 
 /// One Var per named tensor of `layout`, built from `params`.
-fn vars(layout: &ParamLayout, params: &[f32], dtype: DType) -> Result<Vec<Var>> {
+pub(crate) fn vars(layout: &ParamLayout, params: &[f32], dtype: DType) -> Result<Vec<Var>> {
     layout
         .tensors()
         .iter()
@@ -79,15 +79,15 @@ fn flat_grads(layout: &ParamLayout, vars: &[Var], loss: &Tensor) -> Result<Vec<f
     Ok(out)
 }
 
-fn linear(x: &Tensor, w: &Var, b: &Var) -> candle_core::Result<Tensor> {
+pub(crate) fn linear(x: &Tensor, w: &Var, b: &Var) -> candle_core::Result<Tensor> {
     x.matmul(&w.as_tensor().t()?)?.broadcast_add(b.as_tensor())
 }
 
-fn sigmoid(x: &Tensor) -> candle_core::Result<Tensor> {
+pub(crate) fn sigmoid(x: &Tensor) -> candle_core::Result<Tensor> {
     (x.neg()?.exp()? + 1.0)?.recip()
 }
 
-fn column(values: &[f64], dtype: DType) -> candle_core::Result<Tensor> {
+pub(crate) fn column(values: &[f64], dtype: DType) -> candle_core::Result<Tensor> {
     Tensor::from_slice(values, values.len(), &Device::Cpu)?.to_dtype(dtype)
 }
 

@@ -1,0 +1,276 @@
+//! The fused training pass of the category network on one chunk: forward, render, loss,
+//! backward, with each member's ∂L/∂c summed into the `dc` tail of the gradient buffer.
+
+use super::super::dense::Rows;
+use super::super::encoding::{self, COL_DIMS, EMB_LD, GEO_DIMS};
+use super::super::gemm::{Init, Post, padded};
+use super::super::loss::{FieldLosses, LossNorm, ray_loss};
+use super::super::occupancy::{ALPHA_SCALE, Heads};
+use super::super::render::{render_ray, render_ray_backward};
+use super::super::simd::Backend;
+use super::CategorySamples;
+use super::net::{CAT, CategoryNet, CategoryScratch, Membership, SHAPE_1, SHAPE_2, TEXTURE, encoding_rows};
+
+/// The read-only inputs of one category's chunks in a step.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ChunkInputs<'a> {
+    /// Canonical weights.
+    pub params: &'a [f32],
+    /// Packed weights.
+    pub packed: &'a [f32],
+    /// Code table of the step.
+    pub table: &'a [f32],
+    /// Encoding scale.
+    pub scale: f32,
+    /// The category's samples.
+    pub samples: &'a CategorySamples,
+    /// Reciprocal mask counts over all the category's rays.
+    pub norm: &'a LossNorm,
+}
+
+impl CategoryNet {
+    /// One fused training pass over rays `rays` of `input.samples`. Returns this chunk's share
+    /// of the losses; adds packed gradients to `grad[..grad_len]` and each member's ∂L/∂c to
+    /// the table-shaped tail `grad[grad_len..]`.
+    pub(crate) fn train_chunk(
+        &self,
+        backend: Backend,
+        input: ChunkInputs<'_>,
+        rays: std::ops::Range<usize>,
+        s: &mut CategoryScratch,
+        grad: &mut [f32],
+    ) -> FieldLosses {
+        let samples = &input.samples.rays;
+        let spr = samples.samples_per_ray;
+        let range = rays.start * spr..rays.end * spr;
+        let n = range.len();
+        let (hp, hh) = (self.hp(), padded(self.hidden / 2));
+        let members = Membership {
+            rays: &input.samples.members[rays.clone()],
+            samples_per_ray: spr,
+        };
+        let (params, packed) = (input.params, input.packed);
+        let points = &samples.points[range.clone()];
+        self.forward(
+            backend,
+            params,
+            packed,
+            input.table,
+            input.scale,
+            points,
+            members,
+            s,
+            Heads::All,
+        );
+        let z = &samples.z[range];
+
+        // Render, loss and gradients with respect to the raw head outputs.
+        let mut losses = FieldLosses::default();
+        s.d_alpha[..n * 16].fill(0.0);
+        s.d_colour[..n * 16].fill(0.0);
+        for (i, ray) in rays.enumerate() {
+            let r = i * spr..(i + 1) * spr;
+            let (occ, rgb, zr) = (&s.occ[r.clone()], &s.rgb[r.clone()], &z[r.clone()]);
+            let render = render_ray(occ, rgb, zr, &mut s.weights[r.clone()], &mut s.trans[r.clone()]);
+            let (l, g) = ray_loss(
+                &render,
+                samples.depth_m[ray],
+                samples.rgb[ray],
+                samples.states[ray],
+                input.norm,
+            );
+            losses = losses.add(l);
+            let (w, t) = (&s.weights[r.clone()], &s.trans[r.clone()]);
+            render_ray_backward(&g, occ, rgb, zr, w, t, &mut s.d_occ[r.clone()], &mut s.d_rgb[r.clone()]);
+            for k in r {
+                let o = s.occ[k];
+                s.d_alpha[k * 16] = ALPHA_SCALE * s.d_occ[k] * o * (1.0 - o);
+                for c in 0..3 {
+                    let v = s.rgb[k][c];
+                    s.d_colour[k * 16 + c] = s.d_rgb[k][c] * v * (1.0 - v);
+                }
+            }
+        }
+
+        // Backward through the network, colour head first.
+        let (grad, dc) = grad.split_at_mut(self.grad_len);
+        let [l_xyz, l_s1, l_cat, l_s2, l_enc, l_sigma, l_view, l_t1, l_rgb0, l_rgb2] = &self.layers;
+        let [y0, y0c, y1, y1c, y2, y2c, y3, y4, y5, y5c, y6, y7] = &s.h;
+        let geo = Rows::new(&s.emb, EMB_LD);
+        let col = Rows::new(&s.emb[GEO_DIMS..], EMB_LD);
+        let (p, q) = (&mut s.p, &mut s.q);
+        let (gp, cp) = (padded(GEO_DIMS), padded(COL_DIMS));
+        let d_colour = Rows::new(&s.d_colour, 16);
+        let d_alpha = Rows::new(&s.d_alpha, 16);
+        let code_grad = |d: &mut [f32], y: &[f32], slot: usize, dc: &mut [f32]| {
+            self.code_grad_and_mask(d, y, slot, n, members, dc);
+        };
+        // rgb.2 → p = d(y7 pre), width W/2.
+        l_rgb2.backward_weights(backend, n, &[Rows::new(y7, hh)], d_colour, grad);
+        let post = Post::Mask { data: y7, ld: hh };
+        l_rgb2.backward_input(backend, packed, n, 0, d_colour, p, hh, Init::Zero, post);
+        // rgb.0 → q = d(y6 pre).
+        l_rgb0.backward_weights(backend, n, &[Rows::new(y6, hp)], Rows::new(p, hh), grad);
+        l_rgb0.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(p, hh),
+            q,
+            hp,
+            Init::Zero,
+            Post::Mask { data: y6, ld: hp },
+        );
+        // texture_layer_1 → p = d(y5 + c_t) → dc_t, then d(y5 pre).
+        l_t1.backward_weights(backend, n, &[Rows::new(y5c, hp)], Rows::new(q, hp), grad);
+        l_t1.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(q, hp),
+            p,
+            hp,
+            Init::Zero,
+            Post::Identity,
+        );
+        code_grad(p, y5, TEXTURE, dc);
+        // encoding_viewdir → q = dy4 (from colour), d_col.
+        l_view.backward_weights(backend, n, &[Rows::new(y4, hp), col], Rows::new(p, hp), grad);
+        l_view.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(p, hp),
+            q,
+            hp,
+            Init::Zero,
+            Post::Identity,
+        );
+        let d_col = &mut s.d_col;
+        l_view.backward_input(
+            backend,
+            packed,
+            n,
+            1,
+            Rows::new(p, hp),
+            d_col,
+            cp,
+            Init::Zero,
+            Post::Identity,
+        );
+        // sigma → q += dy4 (from α); y4 is linear.
+        l_sigma.backward_weights(backend, n, &[Rows::new(y4, hp)], d_alpha, grad);
+        l_sigma.backward_input(backend, packed, n, 0, d_alpha, q, hp, Init::Accumulate, Post::Identity);
+        // encoding_shape → p = d(y3 pre).
+        l_enc.backward_weights(backend, n, &[Rows::new(y3, hp)], Rows::new(q, hp), grad);
+        l_enc.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(q, hp),
+            p,
+            hp,
+            Init::Zero,
+            Post::Mask { data: y3, ld: hp },
+        );
+        // shape_layer_2 → q = d(y2 + c) → dc, then d(y2 pre).
+        l_s2.backward_weights(backend, n, &[Rows::new(y2c, hp)], Rows::new(p, hp), grad);
+        l_s2.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(p, hp),
+            q,
+            hp,
+            Init::Zero,
+            Post::Identity,
+        );
+        code_grad(q, y2, SHAPE_2, dc);
+        // cat_layer → p = d(y1 + c) → dc, then d(y1 pre); d_geo.
+        l_cat.backward_weights(backend, n, &[Rows::new(y1c, hp), geo], Rows::new(q, hp), grad);
+        l_cat.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(q, hp),
+            p,
+            hp,
+            Init::Zero,
+            Post::Identity,
+        );
+        let d_geo = &mut s.d_geo;
+        l_cat.backward_input(
+            backend,
+            packed,
+            n,
+            1,
+            Rows::new(q, hp),
+            d_geo,
+            gp,
+            Init::Zero,
+            Post::Identity,
+        );
+        code_grad(p, y1, CAT, dc);
+        // shape_layer_1 → q = d(y0 + c) → dc, then d(y0 pre).
+        l_s1.backward_weights(backend, n, &[Rows::new(y0c, hp)], Rows::new(p, hp), grad);
+        l_s1.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(p, hp),
+            q,
+            hp,
+            Init::Zero,
+            Post::Identity,
+        );
+        code_grad(q, y0, SHAPE_1, dc);
+        // encoding_xyz → d_geo += ….
+        l_xyz.backward_weights(backend, n, &[geo], Rows::new(q, hp), grad);
+        let d_geo = &mut s.d_geo;
+        l_xyz.backward_input(
+            backend,
+            packed,
+            n,
+            0,
+            Rows::new(q, hp),
+            d_geo,
+            gp,
+            Init::Accumulate,
+            Post::Identity,
+        );
+        let gb = &mut grad[self.b_grad..self.b_grad + 3 * encoding_rows()];
+        encoding::backward_chunk(&s.emb, &s.dsin, &s.d_geo, gp, &s.d_col, cp, n, gb);
+        losses
+    }
+
+    /// `d` holds ∂L/∂(y + c) row by row: adds each row to its member's `dc[slot]`, then keeps
+    /// it only where `y` (post-ReLU) is positive, giving ∂L/∂(y's pre-activation).
+    fn code_grad_and_mask(
+        &self,
+        d: &mut [f32],
+        y: &[f32],
+        slot: usize,
+        n: usize,
+        members: Membership<'_>,
+        dc: &mut [f32],
+    ) {
+        let hp = self.hp();
+        for s in 0..n {
+            let acc = &mut dc[members.of(s) * self.table_row() + slot * hp..][..hp];
+            let row = &mut d[s * hp..(s + 1) * hp];
+            for ((a, g), y) in acc.iter_mut().zip(row.iter_mut()).zip(&y[s * hp..]) {
+                *a += *g;
+                if *y <= 0.0 {
+                    *g = 0.0;
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,268 @@
+//! The fused category-field kernel against candle autograd (f64): losses, the gradient of every
+//! network tensor and of every member's codes, for several category, member and ray counts;
+//! bit-identical results across thread counts; and a short training run on two spheres.
+
+use candle_core::DType;
+use catmap::field::category::reference::category_reference;
+use catmap::field::{AdamWConfig, Backend, CategoryBatch, CategoryField, CategorySamples, ParamLayout, RaySamples};
+use catmap::ids::ObjectId;
+use catmap::object_view::PixelState;
+use catmap::rng::{RngStream, seeded_rng};
+use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
+
+/// ‖a − b‖ / max(‖b‖, 1e-2·‖b_all‖): norm-relative error with a floor for near-cancelling tensors
+/// (as in `field_gradients.rs`).
+fn relative_error(got: &[f32], want: &[f64], all_norm: f64) -> f64 {
+    let diff = got
+        .iter()
+        .zip(want)
+        .map(|(g, w)| (f64::from(*g) - w).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let norm = want.iter().map(|w| w * w).sum::<f64>().sqrt();
+    diff / norm.max(1e-2 * all_norm)
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// Scales the α head down by 10 so that occupancies stay away from 0 and 1 (see
+/// `field_gradients.rs::well_conditioned`).
+fn well_conditioned(mut field: CategoryField) -> CategoryField {
+    let layout = field.layout();
+    for name in ["sigma.weight", "sigma.bias"] {
+        let range = layout.get(name).expect("the category layout has an α head").range();
+        for p in &mut field.params_mut()[range] {
+            *p *= 0.1;
+        }
+    }
+    field
+}
+
+/// Categories with `members[c]` members each, code dimension `code_dim`, and random rays of
+/// random members.
+fn setup(
+    seed: u64,
+    members: &[usize],
+    code_dim: usize,
+    rays: usize,
+    samples_per_ray: usize,
+    backend: Backend,
+) -> (CategoryBatch, Vec<CategorySamples>) {
+    let mut batch = CategoryBatch::with_backend(AdamWConfig::default(), backend);
+    let mut samples = Vec::new();
+    for (c, &m) in members.iter().enumerate() {
+        let mut rng = seeded_rng(seed, RngStream::Object(ObjectId(c as u32)));
+        batch.push(well_conditioned(CategoryField::new(32, code_dim, 1.0, m, &mut rng)));
+        let rays = RaySamples::random(&mut rng, rays, samples_per_ray, 0.8, 0.15);
+        let members = (0..rays.num_rays()).map(|_| rng.random_range(0..m)).collect();
+        samples.push(CategorySamples { rays, members });
+    }
+    (batch, samples)
+}
+
+fn check_against_candle(seed: u64, members: &[usize], code_dim: usize, rays: usize, spr: usize, backend: Backend) {
+    let (mut batch, samples) = setup(seed, members, code_dim, rays, spr, backend);
+    let (losses, grads) = batch.loss_and_gradients(&samples).expect("shapes agree");
+    for (c, field) in batch.fields().iter().enumerate() {
+        let reference = category_reference(field, &samples[c], DType::F64).expect("candle runs");
+        let l = losses[c];
+        let close = |a: f32, b: f64| (f64::from(a) - b).abs() <= 1e-4 * b.abs().max(1e-2);
+        assert!(
+            close(l.total, reference.total) && close(l.code_reg, reference.code_reg),
+            "category {c}: total {} (reg {}) vs candle {} (reg {})",
+            l.total,
+            l.code_reg,
+            reference.total,
+            reference.code_reg
+        );
+        let f = l.field;
+        assert!(
+            close(f.depth, reference.depth) && close(f.colour, reference.colour) && close(f.opacity, reference.opacity),
+            "category {c}: loss terms {f:?} vs {reference:?}"
+        );
+        let layout: ParamLayout = field.layout();
+        let all = norm(&reference.grad);
+        for t in layout.tensors() {
+            let rel = relative_error(&grads[c].weights[t.range()], &reference.grad[t.range()], all);
+            assert!(
+                rel <= 1e-4,
+                "{backend:?} category {c}: gradient of {} off by {rel:.2e}",
+                t.name
+            );
+        }
+        let all_codes: Vec<f64> = reference.code_grads.concat();
+        for (m, want) in reference.code_grads.iter().enumerate() {
+            let rel = relative_error(&grads[c].codes[m], want, norm(&all_codes));
+            assert!(
+                rel <= 1e-4,
+                "{backend:?} category {c}: gradient of member {m}'s codes off by {rel:.2e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn one_category_of_two_members_matches_candle_autograd() {
+    check_against_candle(1, &[2], 32, 24, 10, Backend::detect());
+}
+
+#[test]
+fn several_categories_and_member_counts_match_candle_autograd() {
+    // 1, 3 and 4 members; 37 rays of 7 samples (chunks not filled), small codes.
+    check_against_candle(2, &[1, 3, 4], 8, 37, 7, Backend::detect());
+}
+
+#[test]
+fn many_rays_split_into_several_tasks_match_candle_autograd() {
+    // 300 rays × 10 samples × 18k parameters: four tasks, reduced in order.
+    check_against_candle(3, &[3, 2], 32, 300, 10, Backend::detect());
+}
+
+#[test]
+fn every_simd_backend_matches_candle_autograd() {
+    for backend in Backend::all_available() {
+        check_against_candle(4, &[2, 3], 16, 13, 10, backend);
+    }
+}
+
+#[test]
+fn results_are_bit_identical_for_any_thread_count() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| {
+            let (mut batch, samples) = setup(5, &[3, 2, 4], 32, 200, 10, Backend::detect());
+            let losses: Vec<f32> = (0..3)
+                .flat_map(|_| batch.train_step(&samples).expect("shapes agree"))
+                .map(|l| l.total)
+                .collect();
+            let state: Vec<(Vec<f32>, Vec<Vec<f32>>)> = batch
+                .fields()
+                .iter()
+                .map(|f| {
+                    let codes = (0..f.num_members())
+                        .map(|m| f.code(m).expect("member").to_vec())
+                        .collect();
+                    (f.params().to_vec(), codes)
+                })
+                .collect();
+            (losses, state)
+        })
+    };
+    assert_eq!(run(1), run(2), "1 and 2 threads give the same losses, weights and codes");
+}
+
+#[test]
+fn adding_a_member_keeps_the_other_members_optimiser_states() {
+    let (mut batch, mut samples) = setup(6, &[2], 16, 20, 10, Backend::detect());
+    batch.train_step(&samples).expect("shapes agree");
+    let before = batch.fields()[0].code_optimiser_state(1).expect("member 1").clone();
+    let mut rng = seeded_rng(6, RngStream::Mapper);
+    let new = batch.field_mut(0).expect("category 0").add_member(&mut rng);
+    assert_eq!(new, 2);
+    assert_eq!(batch.fields()[0].code_optimiser_state(1), Some(&before), "member 1 untouched");
+    samples[0].members[0] = new;
+    batch.train_step(&samples).expect("shapes agree");
+    let field = &batch.fields()[0];
+    assert_eq!(field.code_optimiser_state(1).map(|s| s.step), Some(2));
+    assert_eq!(field.code_optimiser_state(2).map(|s| s.step), Some(1));
+    assert_eq!(field.optimiser_state().step, 2);
+}
+
+/// Rays from a sphere of radius 2.5 at a sphere of radius `radius` around the origin (NOCS):
+/// hits get 2 free-space samples and 8 around the surface (vMAP-style, σ = 0.1/3), misses 10
+/// stratified samples through the unit cube; colour `rgb`.
+fn sphere_rays(rng: &mut ChaCha8Rng, radius: f32, rgb: [f32; 3], rays: usize, out: &mut RaySamples) {
+    out.samples_per_ray = 10;
+    for _ in 0..rays {
+        let unit = |rng: &mut ChaCha8Rng| loop {
+            let v: [f32; 3] = std::array::from_fn(|_| rng.random_range(-1.0f32..1.0));
+            let n = v.iter().map(|x| x * x).sum::<f32>().sqrt();
+            if n > 0.1 && n <= 1.0 {
+                break v.map(|x| x / n);
+            }
+        };
+        let origin = unit(rng).map(|x| 2.5 * x);
+        let target: [f32; 3] = std::array::from_fn(|_| rng.random_range(-0.75f32..0.75));
+        let len = (0..3).map(|c| (target[c] - origin[c]).powi(2)).sum::<f32>().sqrt();
+        let dir: [f32; 3] = std::array::from_fn(|c| (target[c] - origin[c]) / len);
+        // |o + t d|² = r²  →  t² + 2 (o·d) t + |o|² − r² = 0.
+        let od: f32 = (0..3).map(|c| origin[c] * dir[c]).sum();
+        let disc = od * od - (6.25 - radius * radius);
+        let (near, far) = (2.5 - 1.75, 2.5 + 1.75);
+        let mut z: Vec<f32> = if disc > 0.0 {
+            let hit = -od - disc.sqrt();
+            out.depth_m.push(hit);
+            out.states.push(PixelState::ThisObject);
+            let mut z: Vec<f32> = (0..2).map(|_| rng.random_range(near..hit - 0.1)).collect();
+            z.extend((0..8).map(|_| {
+                let g = (-2.0 * (1.0 - rng.random::<f32>()).ln()).sqrt() * (6.283_185 * rng.random::<f32>()).cos();
+                hit + (g * 0.1 / 3.0).clamp(-0.1, 0.1)
+            }));
+            z
+        } else {
+            out.depth_m.push(far);
+            out.states.push(PixelState::OtherObject);
+            (0..10)
+                .map(|i| near + (far - near) * (i as f32 + rng.random::<f32>()) / 10.0)
+                .collect()
+        };
+        z.sort_by(f32::total_cmp);
+        for zi in z {
+            out.points.push(std::array::from_fn(|c| origin[c] + zi * dir[c]));
+            out.z.push(zi);
+        }
+        out.rgb.push(rgb);
+    }
+}
+
+#[test]
+fn two_spheres_train_into_two_shapes_of_one_category() {
+    let (small, large) = (0.45f32, 0.6f32);
+    let mut rng = seeded_rng(7, RngStream::Mapper);
+    let mut batch = CategoryBatch::new(AdamWConfig::default());
+    batch.push(CategoryField::new(32, 32, 1.0, 2, &mut rng));
+    let mut totals = Vec::new();
+    for _ in 0..400 {
+        let mut s = CategorySamples::default();
+        sphere_rays(&mut rng, small, [0.9, 0.1, 0.1], 120, &mut s.rays);
+        s.members.extend([0; 120]);
+        sphere_rays(&mut rng, large, [0.1, 0.9, 0.1], 120, &mut s.rays);
+        s.members.extend([1; 120]);
+        totals.push(batch.train_step(&[s]).expect("valid samples")[0].total);
+    }
+    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+    let (first, last) = (mean(&totals[..20]), mean(&totals[totals.len() - 20..]));
+    assert!(last < 0.5 * first, "loss falls: first 20 steps {first}, last 20 {last}");
+
+    let field = &batch.fields()[0];
+    let shell = |r: f32| -> Vec<[f32; 3]> {
+        let mut dirs = seeded_rng(8, RngStream::Mapper);
+        (0..200)
+            .map(|_| {
+                let v: [f32; 3] = std::array::from_fn(|_| dirs.random_range(-1.0f32..1.0));
+                let n = v.iter().map(|x| x * x).sum::<f32>().sqrt().max(1e-3);
+                v.map(|x| r * x / n)
+            })
+            .collect()
+    };
+    let occ = |member: usize, r: f32| mean(&field.eval_occupancy(member, &shell(r)).expect("member exists"));
+    let between = (small + large) / 2.0;
+    let (o_small, o_large) = (occ(0, between), occ(1, between));
+    assert!(
+        o_large > 0.5 && o_small < 0.5 && o_large - o_small > 0.3,
+        "at r = {between} the larger sphere is occupied ({o_large}) and the smaller is not ({o_small})"
+    );
+    for member in 0..2 {
+        assert!(occ(member, 0.3) > 0.5, "member {member} is full inside r = 0.3");
+        assert!(occ(member, 0.8) < 0.5, "member {member} is empty outside r = 0.8");
+    }
+    let colour = field.eval(1, &shell(0.6)).expect("member exists").colour;
+    let green = mean(&colour.iter().map(|c| c[1] - c[0]).collect::<Vec<_>>());
+    assert!(green > 0.2, "the larger sphere is green at its surface ({green})");
+}
