@@ -87,6 +87,9 @@ fn check_against_candle(seed: u64, members: &[usize], code_dim: usize, rays: usi
         let all = norm(&reference.grad);
         for t in layout.tensors() {
             let rel = relative_error(&grads[c].weights[t.range()], &reference.grad[t.range()], all);
+            if std::env::var("FIELD_DEBUG").is_ok() {
+                eprintln!("{} category {c} {:>26}: rel {rel:.2e}", backend.name(), t.name);
+            }
             assert!(
                 rel <= 1e-4,
                 "{backend:?} category {c}: gradient of {} off by {rel:.2e}",
@@ -96,6 +99,9 @@ fn check_against_candle(seed: u64, members: &[usize], code_dim: usize, rays: usi
         let all_codes: Vec<f64> = reference.code_grads.concat();
         for (m, want) in reference.code_grads.iter().enumerate() {
             let rel = relative_error(&grads[c].codes[m], want, norm(&all_codes));
+            if std::env::var("FIELD_DEBUG").is_ok() {
+                eprintln!("{} category {c} member {m:>2} codes: rel {rel:.2e}", backend.name());
+            }
             assert!(
                 rel <= 1e-4,
                 "{backend:?} category {c}: gradient of member {m}'s codes off by {rel:.2e}"
@@ -154,7 +160,11 @@ fn results_are_bit_identical_for_any_thread_count() {
             (losses, state)
         })
     };
-    assert_eq!(run(1), run(2), "1 and 2 threads give the same losses, weights and codes");
+    assert_eq!(
+        run(1),
+        run(2),
+        "1 and 2 threads give the same losses, weights and codes"
+    );
 }
 
 #[test]
@@ -165,7 +175,11 @@ fn adding_a_member_keeps_the_other_members_optimiser_states() {
     let mut rng = seeded_rng(6, RngStream::Mapper);
     let new = batch.field_mut(0).expect("category 0").add_member(&mut rng);
     assert_eq!(new, 2);
-    assert_eq!(batch.fields()[0].code_optimiser_state(1), Some(&before), "member 1 untouched");
+    assert_eq!(
+        batch.fields()[0].code_optimiser_state(1),
+        Some(&before),
+        "member 1 untouched"
+    );
     samples[0].members[0] = new;
     batch.train_step(&samples).expect("shapes agree");
     let field = &batch.fields()[0];
@@ -201,7 +215,8 @@ fn sphere_rays(rng: &mut ChaCha8Rng, radius: f32, rgb: [f32; 3], rays: usize, ou
             out.states.push(PixelState::ThisObject);
             let mut z: Vec<f32> = (0..2).map(|_| rng.random_range(near..hit - 0.1)).collect();
             z.extend((0..8).map(|_| {
-                let g = (-2.0 * (1.0 - rng.random::<f32>()).ln()).sqrt() * (6.283_185 * rng.random::<f32>()).cos();
+                let g = (-2.0 * (1.0 - rng.random::<f32>()).ln()).sqrt()
+                    * (std::f32::consts::TAU * rng.random::<f32>()).cos();
                 hit + (g * 0.1 / 3.0).clamp(-0.1, 0.1)
             }));
             z
@@ -258,8 +273,12 @@ fn two_spheres_train_into_two_shapes_of_one_category() {
         o_large > 0.5 && o_small < 0.5 && o_large - o_small > 0.3,
         "at r = {between} the larger sphere is occupied ({o_large}) and the smaller is not ({o_small})"
     );
-    for member in 0..2 {
-        assert!(occ(member, 0.3) > 0.5, "member {member} is full inside r = 0.3");
+    // Only the first surface along each ray is observed, so the interior may stay empty (a shell).
+    for (member, r) in [small, large].into_iter().enumerate() {
+        assert!(
+            occ(member, r - 0.05) > 0.5,
+            "member {member} is occupied just inside its surface"
+        );
         assert!(occ(member, 0.8) < 0.5, "member {member} is empty outside r = 0.8");
     }
     let colour = field.eval(1, &shell(0.6)).expect("member exists").colour;

@@ -290,3 +290,31 @@ impl CategoryField {
             .collect())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::{RngStream, seeded_rng};
+
+    #[test]
+    fn codes_start_with_codenerfs_spread_and_are_seeded() {
+        let field = CategoryField::new(32, 64, 1.0, 40, &mut seeded_rng(1, RngStream::Mapper));
+        let again = CategoryField::new(32, 64, 1.0, 40, &mut seeded_rng(1, RngStream::Mapper));
+        assert_eq!(field, again, "same seed, same weights and codes");
+        let codes: Vec<f32> = field.codes().concat();
+        let var = codes.iter().map(|v| f64::from(*v).powi(2)).sum::<f64>() / codes.len() as f64;
+        assert!((var / (2.0 / 64.0) - 1.0).abs() < 0.1, "variance {var} vs 2/D");
+        assert_eq!((field.param_count(), field.code_param_count()), (22_275, 128));
+    }
+
+    #[test]
+    fn evaluating_an_unknown_member_is_an_error() {
+        let field = CategoryField::new(32, 8, 1.0, 2, &mut seeded_rng(2, RngStream::Mapper));
+        let points = [[0.1, 0.2, 0.3], [-0.4, 0.0, 0.5]];
+        assert!(field.eval_occupancy(2, &points).is_err(), "member 2 of 2");
+        let eval = field.eval(1, &points).expect("member 1 exists");
+        assert_eq!((eval.occupancy.len(), eval.colour.len()), (2, 2));
+        let occupancy = field.eval_occupancy(1, &points).expect("member 1 exists");
+        assert_eq!(occupancy, eval.occupancy, "both heads give the same occupancy");
+    }
+}
