@@ -168,6 +168,33 @@ fn results_are_bit_identical_for_any_thread_count() {
 }
 
 #[test]
+fn one_adamw_step_moves_weights_and_codes_by_the_hand_computed_update() {
+    let (mut batch, samples) = setup(9, &[3], 16, 30, 10, Backend::detect());
+    let (_, grads) = batch.loss_and_gradients(&samples).expect("shapes agree");
+    let field = &batch.fields()[0];
+    let before: Vec<f32> = (0..3).flat_map(|m| field.code(m).expect("member").to_vec()).collect();
+    let before_weights = field.params().to_vec();
+    batch.train_step(&samples).expect("shapes agree");
+    let field = &batch.fields()[0];
+    let after: Vec<f32> = (0..3).flat_map(|m| field.code(m).expect("member").to_vec()).collect();
+    let cfg = AdamWConfig::default();
+    let check = |p0: &[f32], p1: &[f32], g: &[f32], what: &str| {
+        for ((p0, p1), g) in p0.iter().zip(p1).zip(g) {
+            // First AdamW step: p ← p·(1 − lr·wd) − lr·g / (|g| + ε).
+            let (p0, g) = (f64::from(*p0), f64::from(*g));
+            let want = p0 * (1.0 - f64::from(cfg.lr * cfg.weight_decay))
+                - f64::from(cfg.lr) * g / (g.abs() + f64::from(cfg.eps));
+            assert!(
+                (f64::from(*p1) - want).abs() < 2e-7 * (1.0 + p0.abs()),
+                "{what}: {p1} vs {want}"
+            );
+        }
+    };
+    check(&before_weights, field.params(), &grads[0].weights, "weights");
+    check(&before, &after, &grads[0].codes.concat(), "codes");
+}
+
+#[test]
 fn adding_a_member_keeps_the_other_members_optimiser_states() {
     let (mut batch, mut samples) = setup(6, &[2], 16, 20, 10, Backend::detect());
     batch.train_step(&samples).expect("shapes agree");

@@ -24,10 +24,13 @@ pub(crate) const CODE_LAYERS: [&str; 4] = [
     "shape_latent_layer_2",
     "texture_latent_layer_1",
 ];
-/// Slot of each code layer in the table.
+/// Table slot of `shape_latent_layer_1` (added to y0).
 pub(crate) const SHAPE_1: usize = 0;
+/// Table slot of `cat_latent_layer` (added to y1).
 pub(crate) const CAT: usize = 1;
+/// Table slot of `shape_latent_layer_2` (added to y2).
 pub(crate) const SHAPE_2: usize = 2;
+/// Table slot of `texture_latent_layer_1` (added to y5).
 pub(crate) const TEXTURE: usize = 3;
 
 /// Canonical offsets of one code layer (`[W, D]` weight, `[W]` bias).
