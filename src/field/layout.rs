@@ -196,7 +196,7 @@ impl ParamLayout {
     }
 }
 
-pub(crate) use crate::rng::standard_normal_f64 as standard_normal;
+use crate::rng::standard_normal_f64 as standard_normal;
 
 #[cfg(test)]
 mod tests {

@@ -4,13 +4,14 @@ use rand::Rng;
 use rayon::prelude::*;
 
 use super::super::adamw::AdamWState;
-use super::super::layout::{ParamLayout, standard_normal};
+use super::super::layout::ParamLayout;
 use super::super::object_field::FieldEval;
 use super::super::occupancy::Heads;
 use super::super::simd::Backend;
 use super::CODE_REG_WEIGHT;
 use super::net::{CategoryNet, CategoryScratch, Membership};
 use crate::error::{CatmapError, Result};
+use crate::rng::standard_normal_f64 as standard_normal;
 
 /// Points per evaluation chunk.
 const EVAL_CHUNK: usize = 256;
