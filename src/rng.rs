@@ -19,6 +19,8 @@ pub enum RngStream {
     BackgroundField,
     /// One object's field: initial weights and training samples.
     ObjectField(ObjectId),
+    /// The k-th category field: initial weights and codes.
+    CategoryField(u32),
 }
 
 /// Field streams start here, above every object stream.
@@ -33,6 +35,7 @@ pub fn seeded_rng(seed: u64, stream: RngStream) -> ChaCha8Rng {
         RngStream::Object(ObjectId(id)) => 2 + u64::from(id),
         RngStream::BackgroundField => FIELD_STREAMS + 1,
         RngStream::ObjectField(ObjectId(id)) => FIELD_STREAMS + 2 + u64::from(id),
+        RngStream::CategoryField(k) => 2 * FIELD_STREAMS + u64::from(k),
     });
     rng
 }

@@ -3,9 +3,11 @@
 
 use serde::{Deserialize, Serialize};
 
+mod category_fields;
 mod fields;
 mod meshes;
 
+pub use category_fields::CategoryFieldConfig;
 pub use fields::FieldConfig;
 pub use meshes::MeshConfig;
 
@@ -31,6 +33,8 @@ pub struct MapperConfig {
     pub meshes: MeshConfig,
     /// Category-level registration: representatives, subcategories, NOCS frames.
     pub categories: crate::class_registration::CategoryConfig,
+    /// Category-level fields (category mode).
+    pub category_fields: CategoryFieldConfig,
     /// Live visualisation.
     pub rerun: RerunConfig,
 }

@@ -6,7 +6,9 @@ use nalgebra::Point3;
 use super::object_grid::{ObjectFrame, ObjectMeshConfig, extract_object_mesh, paint_vertices};
 use crate::error::Result;
 use crate::field::OccupancyField;
+use crate::field::category::CategoryField;
 use crate::mesh::TriangleMesh;
+use crate::nocs::NocsFrame;
 
 /// Meshes `field` (defined relative to `field_origin`, i.e. at world point `p` it is evaluated at
 /// `p − field_origin`) over the grid of `frame`. An unoccupied field gives an empty mesh.
@@ -26,6 +28,52 @@ pub fn mesh_occupancy_field(
                 .map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8))
                 .collect()
         })?;
+    }
+    Ok(mesh)
+}
+
+/// Meshes member `member` of a category field over its NOCS frame: the grid covers the member's
+/// box (enlarged by 1/`box_fill`), world points are mapped into NOCS before evaluation, and the
+/// mesh comes out in world coordinates. An unoccupied member gives an empty mesh.
+pub fn mesh_category_member(
+    field: &CategoryField,
+    member: usize,
+    nocs: &NocsFrame,
+    config: &ObjectMeshConfig,
+) -> Result<TriangleMesh> {
+    let scale = nocs.world_from_nocs.scaling();
+    let frame = ObjectFrame {
+        world_from_object: nocs.world_from_nocs,
+        extents: nocs.extents / scale,
+    };
+    let nocs_from_world = nocs.world_from_nocs.inverse();
+    let to_nocs = |points: &[Point3<f32>]| -> Vec<[f32; 3]> {
+        points
+            .iter()
+            .map(|p| {
+                let q = nocs_from_world * p;
+                [q.x, q.y, q.z]
+            })
+            .collect()
+    };
+    let mut failure = None;
+    let mut mesh = extract_object_mesh(&frame, config, |points| {
+        field.eval_occupancy(member, &to_nocs(points)).unwrap_or_else(|e| {
+            failure = Some(e);
+            vec![0.0; points.len()]
+        })
+    })?;
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    if !mesh.is_empty() {
+        let colours = field.eval(member, &to_nocs(&mesh.vertices))?.colour;
+        mesh.colors = Some(
+            colours
+                .iter()
+                .map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8))
+                .collect(),
+        );
     }
     Ok(mesh)
 }

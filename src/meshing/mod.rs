@@ -28,7 +28,7 @@ mod marching_cubes;
 pub mod object_grid;
 pub mod sample_grid;
 
-pub use field_mesh::mesh_occupancy_field;
+pub use field_mesh::{mesh_category_member, mesh_occupancy_field};
 pub use map_meshes::MapMeshes;
 pub use marching_cubes::{IsoSurfaceExtractor, marching_cubes};
 pub use object_grid::{ObjectFrame, ObjectGrid, ObjectMeshConfig, extract_object_mesh, paint_vertices};

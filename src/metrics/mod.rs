@@ -12,6 +12,7 @@
 //! objects, serialises with serde, and renders as Markdown ([`render_markdown`]);
 //! [`evaluate_dirs`] evaluates folders of `obj_{id}.ply` meshes.
 
+pub mod compare;
 pub mod crop;
 pub mod eval_dirs;
 pub mod markdown;

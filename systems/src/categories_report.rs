@@ -7,7 +7,9 @@ use bevy_ecs::prelude::*;
 use catmap::{ClassId, ObjectId};
 use serde::Serialize;
 
-use crate::components::{Category, Subcategories};
+use std::collections::BTreeMap;
+
+use crate::components::{Category, Object, Reliability, Subcategories};
 
 /// One member of a subcategory.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -22,6 +24,8 @@ pub struct MemberRecord {
     pub world_from_nocs: [[f32; 4]; 4],
     /// Box edge lengths, metres.
     pub extents: [f32; 3],
+    /// Reliable rays of its uncertainty sphere (what ranks the representative), when computed.
+    pub reliable_rays: Option<usize>,
 }
 
 /// One subcategory.
@@ -46,6 +50,11 @@ pub struct ClassRecord {
 
 /// Every class's subcategories, sorted by class.
 pub fn category_records(world: &mut World) -> Vec<ClassRecord> {
+    let reliable: BTreeMap<ObjectId, usize> = world
+        .query::<(&Object, &Reliability)>()
+        .iter(world)
+        .map(|(o, r)| (o.id, r.0.reliable_rays))
+        .collect();
     let mut records: Vec<ClassRecord> = world
         .query::<(&Category, Option<&Subcategories>)>()
         .iter(world)
@@ -68,6 +77,7 @@ pub fn category_records(world: &mut World) -> Vec<ClassRecord> {
                                     reverse_chamfer: m.alignment.reverse_chamfer,
                                     world_from_nocs: std::array::from_fn(|r| std::array::from_fn(|c| h[(r, c)])),
                                     extents: m.nocs.extents.into(),
+                                    reliable_rays: reliable.get(id).copied(),
                                 }
                             })
                             .collect(),

@@ -59,6 +59,33 @@ pub struct RunArgs {
     /// Training steps of the offline protocol (overrides `fields.offline_iterations`).
     #[arg(long)]
     pub iterations: Option<usize>,
+    /// Category mode: steps of the category fields (overrides `category_fields.iterations`).
+    #[arg(long)]
+    pub category_iterations: Option<usize>,
+    /// How a class's representative is chosen (ablation: random).
+    #[arg(long, value_enum)]
+    pub representative: Option<Representative>,
+    /// Split classes into subcategories (ablation: off).
+    #[arg(long, value_enum)]
+    pub subcategories: Option<Switch>,
+}
+
+/// Representative choices.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Representative {
+    /// The member with the most reliable uncertainty rays (the paper).
+    Uncertainty,
+    /// A member drawn at random (seeded).
+    Random,
+}
+
+/// On or off.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Switch {
+    /// Enabled.
+    On,
+    /// Disabled.
+    Off,
 }
 
 /// Field models.
@@ -66,7 +93,7 @@ pub struct RunArgs {
 pub enum MapMode {
     /// One occupancy field per object (the paper's vMAP* baseline).
     Instance,
-    /// Category-level fields shared by objects of one shape (not available yet).
+    /// Category-level fields shared by objects of one shape (the paper).
     Category,
 }
 
@@ -92,10 +119,22 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     if let Some(max_frames) = args.max_frames {
         config.stream.max_frames = Some(max_frames);
     }
-    anyhow::ensure!(
-        args.mode == MapMode::Instance,
-        "--mode category is not available yet (category-level fields are being built); use --mode instance"
-    );
+    if args.mode == MapMode::Category {
+        config.categories.enabled = true;
+        config.category_fields.enabled = true;
+    }
+    if let Some(iterations) = args.category_iterations {
+        config.category_fields.iterations = iterations;
+    }
+    if let Some(choice) = args.representative {
+        config.categories.representative = match choice {
+            Representative::Uncertainty => catmap::uncertainty::RepresentativeChoice::Uncertainty,
+            Representative::Random => catmap::uncertainty::RepresentativeChoice::Random,
+        };
+    }
+    if let Some(switch) = args.subcategories {
+        config.categories.subcategories.enabled = switch == Switch::On;
+    }
     config.fields.offline |= args.offline;
     if let Some(iterations) = args.iterations {
         config.fields.offline_iterations = iterations;
@@ -115,6 +154,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
 
     let stream = FrameStream::spawn(Arc::clone(&source), positions.clone(), config.stream.channel_capacity);
     let fields = config.fields.clone();
+    let category_mode = config.category_fields.enabled;
+    let category_iterations = config.category_fields.iterations;
     let seed = config.seed;
     let mut mapper = Mapper::with_inbox(config, stream.receiver.clone())?;
     let recording = open_recording(args)?;
@@ -129,6 +170,13 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         let progress = bar(after_stream, if fields.offline { "training" } else { "refining" });
         mapper.train_after_stream(|done, _| progress.set_position(done));
         progress.finish_and_clear();
+    }
+    if category_mode {
+        let total = category_iterations as u64;
+        let progress = bar(total, "category fields");
+        let count = mapper.train_categories(|done, _| progress.set_position(done));
+        progress.finish_and_clear();
+        tracing::info!(category_fields = count, "category fields trained");
     }
     let mut extra_seconds = std::collections::BTreeMap::new();
     if fields.enabled {

@@ -6,6 +6,7 @@
 
 pub mod categories_report;
 pub mod categorize;
+pub mod category_fields;
 pub mod cleanup;
 pub mod clouds;
 pub mod components;

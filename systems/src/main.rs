@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
+mod cli_compare;
 mod cli_eval;
 mod cli_run;
 mod cli_synth;
@@ -27,6 +28,8 @@ enum Command {
     Synth(cli_synth::SynthArgs),
     /// Score predicted object meshes against ground-truth meshes (accuracy, completion, C.R.).
     Eval(cli_eval::EvalArgs),
+    /// Compare two runs' metrics.json side by side (per class, repeated vs unique objects, all).
+    Compare(cli_compare::CompareArgs),
     /// Print the default configuration as TOML (a config file lists only what it changes).
     Config,
 }
@@ -54,6 +57,7 @@ fn main() -> anyhow::Result<()> {
         Command::Run(args) => cli_run::run(&args),
         Command::Synth(args) => cli_synth::synth(&args),
         Command::Eval(args) => cli_eval::eval(&args),
+        Command::Compare(args) => cli_compare::compare(&args),
         Command::Config => {
             print_stdout(&catmap::MapperConfig::default().to_toml());
             Ok(())

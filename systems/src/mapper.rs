@@ -12,13 +12,14 @@ use catmap::stream::{StreamMessage, StreamStats};
 use catmap::{MapperConfig, RgbdFrame};
 use crossbeam_channel::{Receiver, Sender, TrySendError, bounded};
 
+use crate::category_fields::CategoryFields;
 use crate::components::{Background, Keyframes, ObjectCloud, ObjectRng, VisibleFrames};
 use crate::log_rerun::{Rerun, log_world_setup};
 use crate::meshes::collect_meshes;
 use crate::resources::{
     CategoryIndex, Fields, FrameInbox, ObjectIndex, Settings, StageTimes, StreamProgress, TrainingQueue,
 };
-use crate::schedule::{build_final_mesh_schedule, build_schedule, build_training_schedule};
+use crate::schedule::{build_category_schedule, build_final_mesh_schedule, build_schedule, build_training_schedule};
 use crate::snapshot::MapSnapshot;
 
 /// Errors of the mapper facade.
@@ -45,6 +46,7 @@ pub struct Mapper {
     world: World,
     schedule: Schedule,
     training: Schedule,
+    category_training: Schedule,
     final_meshes: Schedule,
     /// Sending end for `push`; `None` when a reader thread feeds the inbox, or after `end_stream`.
     pusher: Option<Sender<StreamMessage>>,
@@ -71,6 +73,7 @@ impl Mapper {
             ObjectRng(seeded_rng(config.seed, RngStream::Background)),
         ));
         world.insert_resource(Fields::new(config.fields.optimiser()));
+        world.insert_resource(CategoryFields::new(config.fields.optimiser()));
         world.init_resource::<TrainingQueue>();
         world.insert_resource(Settings(config));
         world.insert_resource(FrameInbox(inbox));
@@ -82,6 +85,7 @@ impl Mapper {
             world,
             schedule: build_schedule(),
             training: build_training_schedule(),
+            category_training: build_category_schedule(),
             final_meshes: build_final_mesh_schedule(),
             pusher: None,
         })
@@ -180,6 +184,31 @@ impl Mapper {
             done += n;
             on_progress(done);
         }
+    }
+
+    /// The category phase (`category_fields.enabled`): creates the category fields from the
+    /// registered subcategories and runs `category_fields.iterations` steps in chunks of 50 (each
+    /// also a step of the per-object fields, which serve the objects outside category fields);
+    /// `on_progress` gets (done, total). Returns the number of category fields.
+    pub fn train_categories(&mut self, mut on_progress: impl FnMut(u64, u64)) -> usize {
+        let cfg = self.world.resource::<Settings>().0.category_fields.clone();
+        if !cfg.enabled {
+            return 0;
+        }
+        let total = cfg.iterations as u64;
+        let mut done = 0;
+        loop {
+            let n = 50.min(total - done);
+            self.world.resource_mut::<CategoryFields>().pending += n;
+            self.world.resource_mut::<TrainingQueue>().pending += n;
+            self.category_training.run(&mut self.world);
+            done += n;
+            on_progress(done, total);
+            if done >= total {
+                break;
+            }
+        }
+        self.world.resource::<CategoryFields>().members.len()
     }
 
     /// Training steps run so far (object batch).

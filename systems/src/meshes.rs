@@ -3,9 +3,10 @@
 use bevy_ecs::prelude::*;
 use catmap::FrameIndex;
 use catmap::mesh::{Aabb, TriangleMesh};
-use catmap::meshing::{MapMeshes, ObjectFrame, ObjectMeshConfig, mesh_occupancy_field};
+use catmap::meshing::{MapMeshes, ObjectFrame, ObjectMeshConfig, mesh_category_member, mesh_occupancy_field};
 use rayon::prelude::*;
 
+use crate::category_fields::{CategoryFields, CategorySlot};
 use crate::components::{Background, FieldLoss, FieldMesh, FieldSlot, Object, ObjectBounds, ObjectCloud};
 use crate::resources::{Fields, Settings, StageTimes, StreamProgress};
 
@@ -57,19 +58,47 @@ pub fn extract_preview_meshes(
 pub fn extract_final_meshes(
     settings: Res<Settings>,
     fields: Res<Fields>,
+    category_fields: Res<CategoryFields>,
     owners: Meshable,
+    members: Query<(Entity, &Object, &CategorySlot)>,
     mut times: ResMut<StageTimes>,
     mut commands: Commands,
 ) {
     let _timer = times.start("meshes");
     let cfg = &settings.0.meshes;
-    for (entity, mesh, at_step) in mesh_fields(&fields, &owners, &cfg.object, &cfg.background(), true) {
+    let mut meshes = mesh_fields(&fields, &owners, &cfg.object, &cfg.background(), true);
+    // Category members: the mesh of their category field replaces the per-object one.
+    let from_categories = mesh_category_members(&category_fields, &members, &cfg.object);
+    meshes.retain(|(entity, ..)| !from_categories.iter().any(|(e, ..)| e == entity));
+    for (entity, mesh, at_step) in meshes.into_iter().chain(from_categories) {
         commands.entity(entity).insert(FieldMesh {
             mesh,
             at_step,
             is_final: true,
         });
     }
+}
+
+/// Meshes every member of a category field over its NOCS frame (members in id order).
+fn mesh_category_members(
+    fields: &CategoryFields,
+    members: &Query<(Entity, &Object, &CategorySlot)>,
+    config: &ObjectMeshConfig,
+) -> Vec<(Entity, TriangleMesh, u64)> {
+    let mut work: Vec<_> = members.iter().collect();
+    work.sort_by_key(|(_, object, _)| object.id);
+    work.par_iter()
+        .filter_map(|&(entity, object, slot)| {
+            let field = fields.batch.field(slot.field)?;
+            match mesh_category_member(field, slot.member, &slot.nocs, config) {
+                Ok(mesh) => Some((entity, mesh, fields.steps_done)),
+                Err(e) => {
+                    tracing::warn!(object = %object.id, error = %e, "category meshing failed");
+                    None
+                }
+            }
+        })
+        .collect()
 }
 
 /// Meshes of the fields of `owners` (objects in parallel); failures are logged and skipped.

@@ -77,7 +77,7 @@ pub fn register_categories(
                 || ready.iter().any(|r| {
                     p.registered_points
                         .get(&r.id)
-                        .is_none_or(|&n| r.cloud.len() as f64 > n as f64 * (1.0 + f64::from(cfg.reregister_growth)))
+                        .is_none_or(|&n| r.cloud_len as f64 > n as f64 * (1.0 + f64::from(cfg.reregister_growth)))
                 })
         });
         if stale {

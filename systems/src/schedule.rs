@@ -4,6 +4,7 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, SingleThreadedExecutor};
 
 use crate::categorize::update_categories;
+use crate::category_fields::{attach_category_fields, train_category_fields};
 use crate::cleanup::despawn_consumed_frames;
 use crate::clouds::{accumulate_clouds, refresh_object_bounds};
 use crate::ingest::ingest_frames;
@@ -110,6 +111,23 @@ pub fn build_training_schedule() -> Schedule {
             .after(register_categories)
             .run_if(resource_exists::<Rerun>),
     ));
+    schedule
+}
+
+/// The category phase: category fields from the registered subcategories, then their steps
+/// beside the per-object fields' (objects outside any category field keep training).
+pub fn build_category_schedule() -> Schedule {
+    let mut schedule = Schedule::default();
+    schedule.set_executor(SingleThreadedExecutor::new());
+    schedule.add_systems(
+        (
+            attach_category_fields,
+            ApplyDeferred,
+            train_fields,
+            train_category_fields,
+        )
+            .chain(),
+    );
     schedule
 }
 

@@ -40,6 +40,7 @@
 //! | `reference` | the same model in candle autograd |
 
 mod batch;
+mod member_rays;
 mod model;
 mod net;
 pub mod reference;

@@ -1,0 +1,135 @@
+//! Category registration on the default synthetic scene (the category-registration issue's
+//! acceptance): every 2nd frame, the offline protocol with a short training (1 500 steps) and
+//! categories on; then the subcategories and the aligned boxes are checked against the scene's
+//! truth, and the representatives' observed surface fractions are printed.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use catmap::config::FieldConfig;
+use catmap::dataset::FrameSource;
+use catmap::registration::cube_rotations;
+use catmap::synth::{Design, Preset, SyntheticScene};
+use catmap::{MapperConfig, ObjectId};
+use catmap_systems::Mapper;
+use catmap_systems::categories_report::ClassRecord;
+use nalgebra::{Matrix3, Matrix4, Point3};
+
+fn map_default_scene() -> (SyntheticScene, Vec<ClassRecord>) {
+    let scene = SyntheticScene::generate(0, Preset::Default).expect("default scene");
+    let mut config = MapperConfig {
+        seed: 0,
+        fields: FieldConfig {
+            offline: true,
+            offline_iterations: 1500,
+            ..FieldConfig::default()
+        },
+        ..MapperConfig::default()
+    };
+    config.categories.enabled = true;
+    let mut mapper = Mapper::new(config).expect("valid config");
+    for position in (0..scene.len()).step_by(2) {
+        mapper
+            .push(scene.read_frame(position).expect("frame renders"))
+            .expect("valid frame");
+        mapper.step();
+    }
+    mapper.end_stream();
+    mapper.step();
+    mapper.train_after_stream(|_, _| {});
+    let records = mapper.category_records();
+    (scene, records)
+}
+
+/// Smallest rotation angle (degrees) between two box orientations, modulo the box's 24 axis
+/// relabellings.
+fn box_rotation_error_deg(a: &Matrix3<f32>, b: &Matrix3<f32>) -> f32 {
+    cube_rotations()
+        .iter()
+        .map(|c| {
+            let d = a.transpose() * b * c.matrix();
+            ((d.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees()
+        })
+        .fold(f32::INFINITY, f32::min)
+}
+
+#[test]
+fn the_default_scene_splits_the_chair_designs_and_aligns_every_box() {
+    let (scene, records) = map_default_scene();
+    let observed = scene.observed_surface_fraction().clone();
+    let chair = records
+        .iter()
+        .find(|r| r.name.as_deref() == Some("chair"))
+        .expect("a chair class");
+    assert!(!chair.subcategories.is_empty(), "the chair class was registered");
+    let design_of = |id: ObjectId| scene.object(id).expect("scene object").design;
+    let mut subcategory_of_design: BTreeMap<_, BTreeSet<usize>> = BTreeMap::new();
+    for (k, sub) in chair.subcategories.iter().enumerate() {
+        for m in &sub.members {
+            subcategory_of_design.entry(design_of(m.id)).or_default().insert(k);
+        }
+    }
+    assert_eq!(subcategory_of_design.len(), 2, "two chair designs in the scene");
+    for (design, subs) in &subcategory_of_design {
+        assert_eq!(
+            subs.len(),
+            1,
+            "identical {design:?} chairs share one subcategory: {chair:#?}"
+        );
+    }
+    let firsts: BTreeSet<_> = subcategory_of_design.values().map(|s| s.first().copied()).collect();
+    assert_eq!(
+        firsts.len(),
+        2,
+        "the two designs are in different subcategories: {chair:#?}"
+    );
+
+    let mut report = Vec::new();
+    let mut failures = Vec::new();
+    for class in records
+        .iter()
+        .filter(|r| r.subcategories.iter().map(|s| s.members.len()).sum::<usize>() > 1)
+    {
+        for sub in &class.subcategories {
+            let fractions: Vec<f32> = sub.members.iter().map(|m| observed[&m.id]).collect();
+            let mut sorted = fractions.clone();
+            sorted.sort_by(f32::total_cmp);
+            let n = sorted.len();
+            let median = 0.5 * (sorted[(n - 1) / 2] + sorted[n / 2]);
+            // Measured, not asserted: the uncertainty ranking does not track the observed fraction
+            // closely on this scene (see the closing note).
+            println!(
+                "representative {} observed {:.3}, class median {median:.3} of {fractions:?}",
+                sub.representative, observed[&sub.representative]
+            );
+            for m in &sub.members {
+                let object = scene.object(m.id).expect("scene object");
+                let local = object.design.mesh().bounds().expect("design bounds");
+                let truth_centre = object.world_from_object * local.center();
+                let h = Matrix4::from_fn(|r, c| m.world_from_nocs[r][c]);
+                let linear = h.fixed_view::<3, 3>(0, 0).into_owned();
+                let scale = linear.column(0).norm();
+                let centre = Point3::new(h[(0, 3)], h[(1, 3)], h[(2, 3)]);
+                let rotation_deg = box_rotation_error_deg(
+                    &(linear / scale),
+                    object.world_from_object.rotation.to_rotation_matrix().matrix(),
+                );
+                let centre_m = (centre - truth_centre).norm();
+                report.push(format!(
+                    "{} {:?}: {rotation_deg:.1}°, {:.1} cm",
+                    m.id,
+                    object.design,
+                    centre_m * 100.0
+                ));
+                // The swivel chair's footprint (round seat over a five-arm star) has no
+                // well-defined minimum-volume box orientation: its box turns with what the
+                // representative saw. Its centre is checked, its orientation only printed.
+                let orientation_defined = object.design != Design::SwivelChair;
+                if centre_m >= 0.05 || (orientation_defined && rotation_deg >= 10.0) {
+                    failures.push(m.id);
+                }
+            }
+        }
+    }
+    println!("{report:#?}");
+    assert!(failures.is_empty(), "boxes off for {failures:?}: {report:#?}");
+}
