@@ -22,8 +22,8 @@ use crate::uncertainty::{RepresentativeChoice, UncertaintyConfig};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CategoryConfig {
-    /// Register classes while mapping. Off by default for now: the registration front end does
-    /// not yet reach the acceptance accuracy and takes tens of seconds per pair on 2 cores.
+    /// Register classes while mapping (needs the per-object fields: uncertainty ranks the
+    /// representative). `--mode category` needs it.
     pub enabled: bool,
     /// How a (sub)category's representative is chosen.
     pub representative: RepresentativeChoice,
@@ -47,7 +47,7 @@ pub struct CategoryConfig {
 impl Default for CategoryConfig {
     fn default() -> Self {
         Self {
-            enabled: false,
+            enabled: true,
             representative: RepresentativeChoice::Uncertainty,
             subcategories: SubcategoryRule::default(),
             uncertainty: UncertaintyConfig::default(),
