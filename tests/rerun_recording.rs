@@ -40,6 +40,11 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         config.fields.steps_per_frame = 1;
         config.meshes.preview_every_frames = 10;
         config.meshes.preview_voxel_m = 0.05;
+        // A short category phase: chairs share one field (with these weak fields one chair may
+        // be split off into its own subcategory).
+        config.categories.min_field_steps = 1;
+        config.category_fields.enabled = true;
+        config.category_fields.iterations = 20;
         let mut mapper = Mapper::new(config).expect("config");
         mapper.set_recording(rec);
         for position in 0..scene.len() {
@@ -48,6 +53,7 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         }
         mapper.end_stream();
         mapper.step();
+        assert_eq!(mapper.train_categories(|_, _| {}), 1, "one category field");
         let map = mapper.finish();
         assert!(map.objects.len() >= 3, "the small scene maps several objects");
     }
@@ -58,6 +64,7 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         "world/camera/image",
         "world/camera/image/rgb",
         "world/camera/image/depth",
+        "world/categories/0/loss",
         "world/camera/image/instances",
     ] {
         assert!(paths.contains(expected), "{expected} missing from {paths:?}");
@@ -80,6 +87,14 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
     };
     assert!(with_suffix("/loss") >= 3, "field losses are logged: {paths:?}");
     assert!(with_suffix("/mesh") >= 3, "preview meshes are logged: {paths:?}");
+    assert!(
+        with_suffix("/shape_code_norm") >= 2,
+        "the members' code norms are logged: {paths:?}"
+    );
+    assert!(
+        with_suffix("/texture_code_norm") >= 2,
+        "the members' code norms are logged: {paths:?}"
+    );
     assert!(
         paths.contains("world/background/loss"),
         "the background's loss is logged"

@@ -11,6 +11,7 @@ pub mod cleanup;
 pub mod clouds;
 pub mod components;
 pub mod ingest;
+pub mod log_categories;
 pub mod log_rerun;
 pub mod mapper;
 pub mod meshes;

@@ -362,7 +362,7 @@ fn to_le_bytes(values: &[u16]) -> Vec<u8> {
     values.iter().flat_map(|v| v.to_le_bytes()).collect()
 }
 
-fn warn_on_error<E: std::fmt::Display>(result: Result<(), E>, path: &str) {
+pub(crate) fn warn_on_error<E: std::fmt::Display>(result: Result<(), E>, path: &str) {
     if let Err(e) = result {
         tracing::warn!(path, error = %e, "Rerun logging failed");
     }

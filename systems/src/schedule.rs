@@ -8,6 +8,7 @@ use crate::category_fields::{attach_category_fields, train_category_fields};
 use crate::cleanup::despawn_consumed_frames;
 use crate::clouds::{accumulate_clouds, refresh_object_bounds};
 use crate::ingest::ingest_frames;
+use crate::log_categories::log_category_training;
 use crate::log_rerun::{
     Rerun, log_camera_frames, log_field_losses, log_field_meshes, log_instance_legend, log_memberships,
     log_object_boxes, log_object_clouds,
@@ -119,7 +120,7 @@ pub fn build_training_schedule() -> Schedule {
 pub fn build_category_schedule() -> Schedule {
     let mut schedule = Schedule::default();
     schedule.set_executor(SingleThreadedExecutor::new());
-    schedule.add_systems(
+    schedule.add_systems((
         (
             attach_category_fields,
             ApplyDeferred,
@@ -127,7 +128,10 @@ pub fn build_category_schedule() -> Schedule {
             train_category_fields,
         )
             .chain(),
-    );
+        log_category_training
+            .after(train_category_fields)
+            .run_if(resource_exists::<Rerun>),
+    ));
     schedule
 }
 
