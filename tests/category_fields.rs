@@ -3,15 +3,15 @@
 //! better (lower completion distance; measured 3.23 → 3.10 cm with these short runs — the
 //! default scene's figures are in the README), and objects outside category fields are unchanged.
 
+mod common;
+
 use std::collections::BTreeMap;
 
 use catmap::config::FieldConfig;
-use catmap::dataset::FrameSource;
 use catmap::metrics::{Crop, score_object};
 use catmap::rng::{RngStream, seeded_rng};
 use catmap::synth::{Preset, SyntheticScene};
 use catmap::{MapperConfig, ObjectId};
-use catmap_systems::Mapper;
 
 const SEED: u64 = 5;
 
@@ -37,16 +37,7 @@ fn completion_per_object(
         config.category_fields.enabled = true;
         config.category_fields.iterations = category_steps;
     }
-    let mut mapper = Mapper::new(config).expect("valid config");
-    for position in 0..scene.len() {
-        mapper
-            .push(scene.read_frame(position).expect("frame renders"))
-            .expect("valid frame");
-        mapper.step();
-    }
-    mapper.end_stream();
-    mapper.step();
-    mapper.train_after_stream(|_, _| {});
+    let mut mapper = common::mapping::map_scene(scene, 0..scene.len(), config);
     let fields = mapper.train_categories(|_, _| {});
     assert_eq!(
         fields,

@@ -3,14 +3,14 @@
 //! categories on; then the subcategories and the aligned boxes are checked against the scene's
 //! truth, and the representatives' observed surface fractions are printed.
 
+mod common;
+
 use std::collections::{BTreeMap, BTreeSet};
 
 use catmap::config::FieldConfig;
-use catmap::dataset::FrameSource;
 use catmap::registration::cube_rotations;
 use catmap::synth::{Design, Preset, SyntheticScene};
 use catmap::{MapperConfig, ObjectId};
-use catmap_systems::Mapper;
 use catmap_systems::categories_report::ClassRecord;
 use nalgebra::{Matrix3, Matrix4, Point3};
 
@@ -26,16 +26,7 @@ fn map_default_scene() -> (SyntheticScene, Vec<ClassRecord>) {
         ..MapperConfig::default()
     };
     config.categories.enabled = true;
-    let mut mapper = Mapper::new(config).expect("valid config");
-    for position in (0..scene.len()).step_by(2) {
-        mapper
-            .push(scene.read_frame(position).expect("frame renders"))
-            .expect("valid frame");
-        mapper.step();
-    }
-    mapper.end_stream();
-    mapper.step();
-    mapper.train_after_stream(|_, _| {});
+    let mut mapper = common::mapping::map_scene(&scene, (0..scene.len()).step_by(2), config);
     let records = mapper.category_records();
     (scene, records)
 }

@@ -38,6 +38,13 @@ pub struct RaySamplerConfig {
 }
 
 impl RaySamplerConfig {
+    /// The same sampler drawing about `rays` rays per step: pixels per keyframe rounded up so that
+    /// keyframes × pixels ≥ `rays`.
+    pub fn with_rays_per_step(mut self, rays: usize) -> Self {
+        self.pixels_per_keyframe = rays.div_ceil(self.keyframes_per_step.max(1));
+        self
+    }
+
     /// vMAP's object sampler: 5 keyframes × 24 pixels, 1 + 9 samples per ray.
     pub const OBJECT: Self = Self {
         keyframes_per_step: 5,
@@ -247,6 +254,13 @@ mod tests {
             depth_m: vec![depth; 8],
             states: [states, states].concat(),
         }
+    }
+
+    #[test]
+    fn a_ray_budget_becomes_pixels_per_keyframe_rounded_up() {
+        assert_eq!(RaySamplerConfig::OBJECT.with_rays_per_step(120).pixels_per_keyframe, 24);
+        assert_eq!(RaySamplerConfig::OBJECT.with_rays_per_step(121).pixels_per_keyframe, 25);
+        assert_eq!(RaySamplerConfig::OBJECT.with_rays_per_step(360).pixels_per_keyframe, 72);
     }
 
     #[test]

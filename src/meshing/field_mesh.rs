@@ -25,7 +25,7 @@ pub fn mesh_occupancy_field(
                 .eval_world(field_origin, points)
                 .colour
                 .iter()
-                .map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8))
+                .map(|c| to_rgb8(*c))
                 .collect()
         })?;
     }
@@ -63,19 +63,24 @@ pub fn mesh_category_member(
             vec![0.0; points.len()]
         })
     })?;
-    if let Some(e) = failure {
-        return Err(e);
+    if !mesh.is_empty() && failure.is_none() {
+        paint_vertices(&mut mesh, |points| match field.eval(member, &to_nocs(points)) {
+            Ok(eval) => eval.colour.iter().map(|c| to_rgb8(*c)).collect(),
+            Err(e) => {
+                failure = Some(e);
+                vec![[0; 3]; points.len()]
+            }
+        })?;
     }
-    if !mesh.is_empty() {
-        let colours = field.eval(member, &to_nocs(&mesh.vertices))?.colour;
-        mesh.colors = Some(
-            colours
-                .iter()
-                .map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8))
-                .collect(),
-        );
+    match failure {
+        Some(e) => Err(e),
+        None => Ok(mesh),
     }
-    Ok(mesh)
+}
+
+/// A field colour in [0, 1] as 8-bit RGB.
+fn to_rgb8(c: [f32; 3]) -> [u8; 3] {
+    c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)
 }
 
 #[cfg(test)]

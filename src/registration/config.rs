@@ -64,8 +64,6 @@ pub struct RegistrationConfig {
     pub twists: usize,
     /// Angle of the twists, degrees.
     pub twist_deg: f32,
-    /// Start centres: grid cells along the template box's longest side (0: centroid only).
-    pub translation_grid: usize,
     /// Source points (a stride subset of the coarse source) that rank the starts.
     pub ranking_points: usize,
     /// Translation-only trimmed ICP steps every start takes before it is ranked.
@@ -102,7 +100,6 @@ impl Default for RegistrationConfig {
             refine_iterations: 30,
             twists: 6,
             twist_deg: 30.0,
-            translation_grid: 0,
             ranking_points: 64,
             ranked_starts: 48,
             translation_iterations: 5,

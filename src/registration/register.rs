@@ -218,52 +218,20 @@ fn start_rotations(cfg: &RegistrationConfig) -> Vec<UnitQuaternion<f64>> {
         .collect()
 }
 
-/// Where the source's centroid may land in the template frame: the template's centroid and a
-/// grid over its box with `translation_grid` cells along the longest side (a partial view's
-/// centroid is not the whole object's).
-fn start_centres(template: &[Point3<f32>], cfg: &RegistrationConfig) -> Vec<Vector3<f64>> {
-    let mut centres = vec![centroid(template)];
-    let Some(bounds) = crate::mesh::Aabb::from_points(template) else {
-        return centres;
-    };
-    let cells = cfg.translation_grid;
-    if cells == 0 {
-        return centres;
-    }
-    let step = bounds.extent().max() / cells as f32;
-    let counts = bounds.extent().map(|e| (e / step).floor() as usize + 1);
-    let offset = (bounds.extent() - counts.cast::<f32>().map(|c| (c - 1.0) * step)) / 2.0;
-    for i in 0..counts.x {
-        for j in 0..counts.y {
-            for k in 0..counts.z {
-                let cell = Vector3::new(i as f32, j as f32, k as f32) * step;
-                centres.push((bounds.min.coords + offset + cell).cast());
-            }
-        }
-    }
-    centres
-}
-
-/// Every start rotation × start centre, ranked by the trimmed score of a small subset of the
-/// coarse source without any refinement; the `ranked_starts` best (ties: enumeration order).
+/// Every start rotation with the centroids aligned, its translation shifted by
+/// [`shift_translation`], ranked by the trimmed score of a small subset of the coarse source;
+/// the `ranked_starts` best (ties: enumeration order).
 fn ranked_starts(level: &Level, cfg: &RegistrationConfig) -> Vec<Isometry3<f64>> {
     let rotations = start_rotations(cfg);
-    let centres = start_centres(&level.template, cfg);
+    let ct = centroid(&level.template);
     let stride = level.source.len().div_ceil(cfg.ranking_points.max(3));
     let subset: Vec<Point3<f32>> = level.source.iter().step_by(stride.max(1)).copied().collect();
     let cs = centroid(&subset);
-    let poses: Vec<Isometry3<f64>> = rotations
-        .iter()
-        .flat_map(|r| {
-            centres
-                .iter()
-                .map(move |c| Isometry3::from_parts(Translation3::from(c - r * cs), *r))
-        })
-        .collect();
-    let fitted: Vec<(Isometry3<f64>, f32)> = poses
+    let fitted: Vec<(Isometry3<f64>, f32)> = rotations
         .par_iter()
-        .map(|pose| {
-            let pose = shift_translation(&subset, level, *pose, cfg);
+        .map(|r| {
+            let start = Isometry3::from_parts(Translation3::from(ct - r * cs), *r);
+            let pose = shift_translation(&subset, level, start, cfg);
             let moved: Vec<Point3<f32>> = subset.iter().map(|p| (pose * p.cast()).cast()).collect();
             (
                 pose,
@@ -271,12 +239,10 @@ fn ranked_starts(level: &Level, cfg: &RegistrationConfig) -> Vec<Isometry3<f64>>
             )
         })
         .collect();
-    let scores: Vec<f32> = fitted.iter().map(|f| f.1).collect();
-    let poses: Vec<Isometry3<f64>> = fitted.into_iter().map(|f| f.0).collect();
-    let mut order: Vec<usize> = (0..poses.len()).collect();
-    order.sort_by(|&a, &b| scores[a].total_cmp(&scores[b]).then(a.cmp(&b)));
+    let mut order: Vec<usize> = (0..fitted.len()).collect();
+    order.sort_by(|&a, &b| fitted[a].1.total_cmp(&fitted[b].1).then(a.cmp(&b)));
     order.truncate(cfg.ranked_starts.max(1));
-    order.into_iter().map(|k| poses[k]).collect()
+    order.into_iter().map(|k| fitted[k].0).collect()
 }
 
 /// `translation_iterations` translation-only trimmed ICP steps: the translation moves by the mean

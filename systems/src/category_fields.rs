@@ -110,12 +110,11 @@ pub fn train_category_fields(
         return;
     }
     let _timer = times.start("category_train");
-    let mut rays_cfg = settings.0.fields.object_rays;
-    rays_cfg.pixels_per_keyframe = settings
+    let rays_cfg = settings
         .0
-        .category_fields
-        .rays_per_member
-        .div_ceil(rays_cfg.keyframes_per_step.max(1));
+        .fields
+        .object_rays
+        .with_rays_per_step(settings.0.category_fields.rays_per_member);
     let fields = &mut *fields;
     for _ in 0..std::mem::take(&mut fields.pending) {
         let mut work: Vec<_> = members.iter_mut().collect();

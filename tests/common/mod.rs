@@ -1,5 +1,8 @@
-//! Helpers shared by the reader tests: fixture image writers and error-text checks.
+//! Helpers shared by the integration tests: fixture image writers, error-text checks, and
+//! mapping a synthetic scene ([`mapping`]).
 #![allow(dead_code, reason = "each test crate uses a different subset")]
+
+pub mod mapping;
 
 use std::path::Path;
 
