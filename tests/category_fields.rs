@@ -8,6 +8,7 @@ mod common;
 use std::collections::BTreeMap;
 
 use catmap::config::FieldConfig;
+use catmap::dataset::FrameSource;
 use catmap::metrics::{Crop, score_object};
 use catmap::rng::{RngStream, seeded_rng};
 use catmap::synth::{Preset, SyntheticScene};

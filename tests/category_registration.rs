@@ -8,6 +8,7 @@ mod common;
 use std::collections::{BTreeMap, BTreeSet};
 
 use catmap::config::FieldConfig;
+use catmap::dataset::FrameSource;
 use catmap::registration::cube_rotations;
 use catmap::synth::{Design, Preset, SyntheticScene};
 use catmap::{MapperConfig, ObjectId};
