@@ -43,6 +43,14 @@ pub enum CatmapError {
     /// A configuration value is invalid.
     #[error("invalid config: {0}")]
     Config(String),
+    /// A checkpoint is missing, torn or does not match this build.
+    #[error("{path}: unusable checkpoint: {reason}")]
+    Checkpoint {
+        /// The checkpoint file at fault.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
     /// A geometric computation got input it cannot work with.
     #[error("degenerate input: {0}")]
     Degenerate(String),
@@ -54,6 +62,14 @@ impl CatmapError {
         Self::Io {
             path: path.into(),
             source,
+        }
+    }
+
+    /// A checkpoint error for `path`.
+    pub fn checkpoint(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
+        Self::Checkpoint {
+            path: path.into(),
+            reason: reason.into(),
         }
     }
 

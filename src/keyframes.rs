@@ -47,7 +47,7 @@ pub enum Admission {
 }
 
 /// One slot: the frame index and what the caller keeps of that frame.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct KeyframeSlot<T> {
     /// The frame this slot holds.
     pub frame: FrameIndex,
@@ -56,7 +56,7 @@ pub struct KeyframeSlot<T> {
 }
 
 /// The keyframe window of one object.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct KeyframeWindow<T> {
     slots: Vec<KeyframeSlot<T>>,
     /// Slot overwritten by the next non-keyframe.

@@ -9,7 +9,7 @@ use crate::ids::{FrameIndex, ObjectId};
 use crate::pixel_box::PixelBox;
 
 /// A pixel's relation to the object being trained.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[repr(u8)]
 pub enum PixelState {
     /// The pixel shows another object (or, for an object, the background): free space up to it.
@@ -21,7 +21,7 @@ pub enum PixelState {
 }
 
 /// Whose view a crop is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum ViewOwner {
     /// A foreground object.
     Object(ObjectId),
@@ -42,7 +42,7 @@ impl ViewOwner {
 }
 
 /// The crop of one frame kept by one object's keyframe window.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ObjectView {
     /// The frame the crop comes from.
     pub frame: FrameIndex,

@@ -44,14 +44,14 @@ impl Hasher for VoxelKeyHasher {
     }
 }
 
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 struct VoxelSum {
     sum: Vector3<f64>,
     count: u32,
 }
 
 /// Points observed on one object (or the background), thinned by a voxel grid.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ObservedCloud {
     voxel_m: f32,
     voxels: HashMap<u64, VoxelSum, BuildHasherDefault<VoxelKeyHasher>>,

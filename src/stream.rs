@@ -28,7 +28,7 @@ pub enum StreamMessage {
 }
 
 /// What the reader did, sent with [`StreamMessage::End`].
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StreamStats {
     /// Frames sent.
     pub frames_sent: u64,

@@ -130,7 +130,7 @@ pub fn reliability(u: f32, cfg: &UncertaintyConfig) -> f32 {
 }
 
 /// An object's uncertainty sphere, evaluated.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ObjectReliability {
     /// The rays' start points (for display).
     pub sphere_points: Vec<Point3<f32>>,

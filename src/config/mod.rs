@@ -4,10 +4,12 @@
 use serde::{Deserialize, Serialize};
 
 mod category_fields;
+mod checkpoint;
 mod fields;
 mod meshes;
 
 pub use category_fields::CategoryFieldConfig;
+pub use checkpoint::CheckpointConfig;
 pub use fields::FieldConfig;
 pub use meshes::MeshConfig;
 
@@ -37,6 +39,8 @@ pub struct MapperConfig {
     pub category_fields: CategoryFieldConfig,
     /// Live visualisation.
     pub rerun: RerunConfig,
+    /// Checkpoints for `catmap run --resume`.
+    pub checkpoint: CheckpointConfig,
 }
 
 /// Reader thread and channel.

@@ -30,7 +30,7 @@ pub const DEPTH_STD_EPS: f32 = 1e-4;
 const COUNT_EPS: f32 = 1e-10;
 
 /// One field's losses for one step (unweighted terms and the weighted total).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct FieldLosses {
     /// L_depth.
     pub depth: f32,

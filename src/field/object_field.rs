@@ -95,6 +95,20 @@ impl OccupancyField {
         &self.adam
     }
 
+    /// Replaces the AdamW state (e.g. from a checkpoint); its moments must match the parameters.
+    pub fn with_optimiser_state(mut self, adam: AdamWState) -> Result<Self> {
+        if adam.m.len() != self.params.len() || adam.v.len() != self.params.len() {
+            return Err(CatmapError::Degenerate(format!(
+                "optimiser moments of {} / {} values for {} parameters",
+                adam.m.len(),
+                adam.v.len(),
+                self.params.len()
+            )));
+        }
+        self.adam = adam;
+        Ok(self)
+    }
+
     /// Parameters and optimiser state together (for the batched update).
     pub(crate) fn params_and_state_mut(&mut self) -> (&mut [f32], &mut AdamWState) {
         (&mut self.params, &mut self.adam)

@@ -42,7 +42,7 @@ impl CategoryFields {
 }
 
 /// A member's place in a category field.
-#[derive(Component, Debug, Clone, Copy, PartialEq)]
+#[derive(Component, Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CategorySlot {
     /// Index of the category field.
     pub field: usize,

@@ -21,7 +21,7 @@ pub struct CameraFrame(pub SharedFrame);
 pub struct FrameObservations(pub FrameObservation);
 
 /// An object entity: one per dataset instance id.
-#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Object {
     /// The dataset's instance id.
     pub id: ObjectId,
@@ -32,15 +32,15 @@ pub struct Object {
 pub struct Background;
 
 /// Pixel votes per semantic class, summed over all frames.
-#[derive(Component, Debug, Clone, Default, PartialEq)]
+#[derive(Component, Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ClassVotes(pub BTreeMap<ClassId, u64>);
 
 /// The object's class: the majority of its votes.
-#[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct ObjectClass(pub ClassId);
 
 /// The object's 2D boxes in the latest frame it was seen in.
-#[derive(Component, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct LatestBox {
     /// Frame the boxes come from.
     pub frame: FrameIndex,
@@ -52,19 +52,19 @@ pub struct LatestBox {
 
 /// The object's keyframe window; each slot keeps the crop of its frame inside the object's
 /// enlarged 2D box (the background keeps whole frames).
-#[derive(Component, Debug, Clone, Default)]
+#[derive(Component, Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct Keyframes(pub KeyframeWindow<ObjectView>);
 
 /// Number of frames the object (or background) was visible in.
-#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct VisibleFrames(pub u64);
 
 /// The object's observed points, accumulated in a voxel grid.
-#[derive(Component, Debug, Clone)]
+#[derive(Component, Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ObjectCloud(pub ObservedCloud);
 
 /// The minimum-volume oriented box of the observed cloud, and the cloud size it was fitted at.
-#[derive(Component, Debug, Clone, Copy, PartialEq)]
+#[derive(Component, Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ObjectBounds {
     /// The box (edges at least `min_extent_m`).
     pub oriented_box: OrientedBox,
@@ -73,11 +73,11 @@ pub struct ObjectBounds {
 }
 
 /// The object's own random generator, seeded from `(config.seed, object id)`.
-#[derive(Component, Debug, Clone)]
+#[derive(Component, Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ObjectRng(pub ChaCha8Rng);
 
 /// A category entity: one per semantic class seen, listing its objects.
-#[derive(Component, Debug, Clone, PartialEq, Eq)]
+#[derive(Component, Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Category {
     /// The class.
     pub class: ClassId,
@@ -88,7 +88,7 @@ pub struct Category {
 /// Where an entity's field lives in [`crate::resources::Fields`]: its index in the object batch
 /// (the background has its own batch, index 0) and the world point its coordinates start at
 /// (the object's box centre when the field was created; the world origin for the background).
-#[derive(Component, Debug, Clone, Copy, PartialEq)]
+#[derive(Component, Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FieldSlot {
     /// Index in the batch.
     pub index: usize,
@@ -97,11 +97,11 @@ pub struct FieldSlot {
 }
 
 /// The random generator of an entity's field (initial weights, then training samples).
-#[derive(Component, Debug, Clone)]
+#[derive(Component, Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct FieldRng(pub ChaCha8Rng);
 
 /// The field's losses at its latest training step.
-#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FieldLoss {
     /// Losses of the latest step (before its update).
     pub latest: catmap::field::FieldLosses,
@@ -121,11 +121,11 @@ pub struct FieldMesh {
 }
 
 /// The object's uncertainty sphere at its class's latest registration.
-#[derive(Component, Debug, Clone, PartialEq)]
+#[derive(Component, Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Reliability(pub catmap::uncertainty::ObjectReliability);
 
 /// The object's place in its class: subcategory, representative, alignment and NOCS frame.
-#[derive(Component, Debug, Clone, Copy, PartialEq)]
+#[derive(Component, Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Membership {
     /// The class.
     pub class: ClassId,
@@ -138,7 +138,7 @@ pub struct Membership {
 }
 
 /// A category's subcategories at its latest registration, and the cloud sizes it was computed at.
-#[derive(Component, Debug, Clone, PartialEq)]
+#[derive(Component, Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Subcategories {
     /// Subcategories in the order they were split off.
     pub groups: Vec<catmap::class_registration::RegisteredSubcategory>,

@@ -7,6 +7,7 @@
 pub mod categories_report;
 pub mod categorize;
 pub mod category_fields;
+mod checkpoint;
 pub mod cleanup;
 pub mod clouds;
 pub mod components;

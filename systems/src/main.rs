@@ -11,6 +11,8 @@ mod cli_eval;
 mod cli_run;
 mod cli_synth;
 mod progress;
+mod run_phases;
+mod run_plan;
 
 /// Object-level RGB-D mapping with category-level neural fields.
 #[derive(Parser, Debug)]

@@ -1,6 +1,8 @@
 //! The `Mapper` facade: a `World` with the mapper's resources and schedule, fed frame by frame.
 
 use std::collections::BTreeMap;
+use std::ops::ControlFlow;
+use std::path::Path;
 use std::time::Duration;
 
 use bevy_ecs::prelude::*;
@@ -17,7 +19,7 @@ use crate::components::{Background, Keyframes, ObjectCloud, ObjectRng, VisibleFr
 use crate::log_rerun::{Rerun, log_world_setup};
 use crate::meshes::collect_meshes;
 use crate::resources::{
-    CategoryIndex, Fields, FrameInbox, ObjectIndex, Settings, StageTimes, StreamProgress, TrainingQueue,
+    CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, StageTimes, StreamProgress, TrainingQueue,
 };
 use crate::schedule::{build_category_schedule, build_final_mesh_schedule, build_schedule, build_training_schedule};
 use crate::snapshot::MapSnapshot;
@@ -25,7 +27,7 @@ use crate::snapshot::MapSnapshot;
 /// Errors of the mapper facade.
 #[derive(Debug, thiserror::Error)]
 pub enum MapperError {
-    /// The configuration is invalid.
+    /// The configuration is invalid, or a checkpoint cannot be written or used.
     #[error(transparent)]
     Config(#[from] catmap::CatmapError),
     /// A pushed frame is malformed.
@@ -50,7 +52,13 @@ pub struct Mapper {
     final_meshes: Schedule,
     /// Sending end for `push`; `None` when a reader thread feeds the inbox, or after `end_stream`.
     pusher: Option<Sender<StreamMessage>>,
+    /// Whether the category phase has run its first chunk (which creates the category fields).
+    category_phase_started: bool,
 }
+
+/// Training steps per chunk of the phases after the stream (progress and checkpoints happen
+/// between chunks).
+pub const CHUNK_STEPS: u64 = 50;
 
 impl Mapper {
     /// A mapper fed by [`Mapper::push`].
@@ -81,6 +89,7 @@ impl Mapper {
         world.init_resource::<ObjectIndex>();
         world.init_resource::<CategoryIndex>();
         world.init_resource::<StageTimes>();
+        world.init_resource::<PhaseProgress>();
         Ok(Self {
             world,
             schedule: build_schedule(),
@@ -88,7 +97,18 @@ impl Mapper {
             category_training: build_category_schedule(),
             final_meshes: build_final_mesh_schedule(),
             pusher: None,
+            category_phase_started: false,
         })
+    }
+
+    /// The configuration the mapper runs with.
+    pub fn config(&self) -> &MapperConfig {
+        &self.world.resource::<Settings>().0
+    }
+
+    /// Takes frames from `inbox` from now on (e.g. a resumed run's new reader thread).
+    pub fn attach_inbox(&mut self, inbox: Receiver<StreamMessage>) {
+        self.world.insert_resource(FrameInbox(inbox));
     }
 
     /// Logs to `recording` from now on (the `Log` stage only runs with a recording).
@@ -152,6 +172,15 @@ impl Mapper {
 
     /// Steps until the stream ends, calling `on_step` after each step with the frames ingested so far.
     pub fn run_to_end(&mut self, mut on_step: impl FnMut(u64)) {
+        self.run_until(|frames| {
+            on_step(frames);
+            ControlFlow::Continue(())
+        });
+    }
+
+    /// Steps until the stream ends or `on_step` (called after each step with the frames
+    /// ingested so far) breaks; returns whether the stream has ended.
+    pub fn run_until(&mut self, mut on_step: impl FnMut(u64) -> ControlFlow<()>) -> bool {
         while !self.stream_ended() {
             let inbox = self.world.resource::<FrameInbox>().0.clone();
             if inbox.is_empty() {
@@ -162,15 +191,69 @@ impl Mapper {
                 continue;
             }
             self.step();
-            on_step(self.world.resource::<StreamProgress>().frames_ingested);
+            if on_step(self.world.resource::<StreamProgress>().frames_ingested).is_break() {
+                break;
+            }
         }
+        self.stream_ended()
+    }
+
+    /// Stream positions consumed so far (frames ingested plus frames the reader skipped): a
+    /// resumed run's reader starts here.
+    pub fn positions_consumed(&self) -> usize {
+        let progress = self.world.resource::<StreamProgress>();
+        (progress.frames_ingested + progress.frames_skipped) as usize
+    }
+
+    /// Writes the mapper's whole state to the checkpoint folder `dir` (a new generation; see
+    /// `catmap::checkpoint`), with `extra` (the caller's own JSON) beside it.
+    pub fn save_checkpoint(&mut self, dir: &Path, label: &str, extra: String) -> Result<(), MapperError> {
+        let (state, tensors) = crate::checkpoint::capture(&mut self.world, extra)?;
+        catmap::checkpoint::write_checkpoint(dir, &state, &tensors, label)?;
+        Ok(())
+    }
+
+    /// A mapper restored from the checkpoint in `dir`, fed by `inbox` from the stream position
+    /// [`Mapper::positions_consumed`] on (`None` once the stream had ended); returns it with the
+    /// caller's `extra` JSON.
+    pub fn resume(dir: &Path, inbox: Option<Receiver<StreamMessage>>) -> Result<(Self, String), MapperError> {
+        let loaded = catmap::checkpoint::read_checkpoint::<crate::checkpoint::MapperState>(dir)?;
+        let file = dir.join(&loaded.manifest.state.name);
+        let config = crate::checkpoint::config_of(&loaded.state).clone();
+        let inbox = inbox.unwrap_or_else(crossbeam_channel::never);
+        let mut mapper = Self::with_inbox(config, inbox)?;
+        let extra = loaded.state.extra.clone();
+        crate::checkpoint::restore(&mut mapper.world, loaded.state, loaded.tensors, &file)?;
+        mapper.category_phase_started = mapper.world.resource::<PhaseProgress>().category_steps > 0;
+        Ok((mapper, extra))
     }
 
     /// The training due once the stream has ended (`FieldConfig::steps_after_stream`: every step
     /// offline, the refinement online), in chunks of 50; `on_progress` gets (done, total).
     pub fn train_after_stream(&mut self, mut on_progress: impl FnMut(u64, u64)) {
+        self.train_after_stream_until(|done, total| {
+            on_progress(done, total);
+            ControlFlow::Continue(())
+        });
+    }
+
+    /// Like [`Mapper::train_after_stream`], continuing from the steps already done (after a
+    /// resume) and stopping early when `on_chunk` breaks; returns whether the phase is complete.
+    pub fn train_after_stream_until(&mut self, mut on_chunk: impl FnMut(u64, u64) -> ControlFlow<()>) -> bool {
         let total = self.world.resource::<Settings>().0.fields.steps_after_stream() as u64;
-        self.train(total, 50, |done| on_progress(done, total));
+        loop {
+            let done = self.world.resource::<PhaseProgress>().after_stream_steps;
+            if done >= total {
+                return true;
+            }
+            let n = CHUNK_STEPS.min(total - done);
+            self.world.resource_mut::<TrainingQueue>().pending += n;
+            self.training.run(&mut self.world);
+            self.world.resource_mut::<PhaseProgress>().after_stream_steps += n;
+            if on_chunk(done + n, total).is_break() {
+                return done + n >= total;
+            }
+        }
     }
 
     /// Runs `iterations` training steps on the keyframes gathered so far (the offline protocol,
@@ -191,23 +274,41 @@ impl Mapper {
     /// also a step of the per-object fields, which serve the objects outside category fields);
     /// `on_progress` gets (done, total). Returns the number of category fields.
     pub fn train_categories(&mut self, mut on_progress: impl FnMut(u64, u64)) -> usize {
+        self.train_categories_until(|done, total| {
+            on_progress(done, total);
+            ControlFlow::Continue(())
+        });
+        self.category_field_count()
+    }
+
+    /// Like [`Mapper::train_categories`], continuing from the steps already done (after a
+    /// resume) and stopping early when `on_chunk` breaks; returns whether the phase is complete.
+    pub fn train_categories_until(&mut self, mut on_chunk: impl FnMut(u64, u64) -> ControlFlow<()>) -> bool {
         let cfg = self.world.resource::<Settings>().0.category_fields.clone();
         if !cfg.enabled {
-            return 0;
+            return true;
         }
         let total = cfg.iterations as u64;
-        let mut done = 0;
         loop {
-            let n = 50.min(total - done);
+            let done = self.world.resource::<PhaseProgress>().category_steps;
+            // The first chunk runs even for zero iterations: it creates the category fields.
+            if done >= total && (done > 0 || self.category_phase_started) {
+                return true;
+            }
+            self.category_phase_started = true;
+            let n = CHUNK_STEPS.min(total - done);
             self.world.resource_mut::<CategoryFields>().pending += n;
             self.world.resource_mut::<TrainingQueue>().pending += n;
             self.category_training.run(&mut self.world);
-            done += n;
-            on_progress(done, total);
-            if done >= total {
-                break;
+            self.world.resource_mut::<PhaseProgress>().category_steps += n;
+            if on_chunk(done + n, total).is_break() {
+                return done + n >= total;
             }
         }
+    }
+
+    /// Number of category fields created so far.
+    pub fn category_field_count(&self) -> usize {
         self.world.resource::<CategoryFields>().members.len()
     }
 
@@ -249,18 +350,18 @@ impl Mapper {
     }
 
     /// Like [`Mapper::finish`], also returning the seconds spent per stage.
-    pub fn finish_keeping_times(self) -> (MapSnapshot, BTreeMap<&'static str, f64>) {
+    pub fn finish_keeping_times(self) -> (MapSnapshot, BTreeMap<String, f64>) {
         let times = self.stage_seconds();
         (self.finish(), times)
     }
 
     /// Seconds spent per stage so far.
-    pub fn stage_seconds(&self) -> BTreeMap<&'static str, f64> {
+    pub fn stage_seconds(&self) -> BTreeMap<String, f64> {
         self.world
             .resource::<StageTimes>()
             .0
             .iter()
-            .map(|(k, v)| (*k, v.as_secs_f64()))
+            .map(|(k, v)| (k.clone(), v.as_secs_f64()))
             .collect()
     }
 

@@ -17,7 +17,7 @@ pub struct Settings(pub MapperConfig);
 pub struct FrameInbox(pub Receiver<StreamMessage>);
 
 /// How far the stream has come.
-#[derive(Resource, Debug, Clone, Default, PartialEq)]
+#[derive(Resource, Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StreamProgress {
     /// Frames taken from the inbox.
     pub frames_ingested: u64,
@@ -39,7 +39,7 @@ pub struct CategoryIndex(pub BTreeMap<ClassId, Entity>);
 
 /// Wall-clock time spent per stage.
 #[derive(Resource, Debug, Clone, Default)]
-pub struct StageTimes(pub BTreeMap<&'static str, Duration>);
+pub struct StageTimes(pub BTreeMap<String, Duration>);
 
 impl StageTimes {
     /// Starts timing `stage`; the time is added when the returned guard drops.
@@ -61,7 +61,13 @@ pub struct StageTimer<'a> {
 
 impl Drop for StageTimer<'_> {
     fn drop(&mut self) {
-        *self.times.0.entry(self.stage).or_default() += self.started.elapsed();
+        let elapsed = self.started.elapsed();
+        match self.times.0.get_mut(self.stage) {
+            Some(total) => *total += elapsed,
+            None => {
+                self.times.0.insert(self.stage.to_owned(), elapsed);
+            }
+        }
     }
 }
 
@@ -91,10 +97,20 @@ impl Fields {
 }
 
 /// Training steps waiting to run, and steps run so far.
-#[derive(Resource, Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Resource, Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct TrainingQueue {
     /// Steps the training system will run at its next call.
     pub pending: u64,
     /// Object-batch steps run so far.
     pub steps_done: u64,
+}
+
+/// How far the phases after the stream have come, so that a resumed run continues where it
+/// stopped.
+#[derive(Resource, Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct PhaseProgress {
+    /// Steps of the training after the stream (offline training or online refinement) done.
+    pub after_stream_steps: u64,
+    /// Steps of the category phase done.
+    pub category_steps: u64,
 }

@@ -190,6 +190,25 @@ impl CategoryField {
         self.members.get(member).map(|m| &m.adam)
     }
 
+    /// Replaces the AdamW states of the network and of every member's codes (e.g. from a
+    /// checkpoint); every moment vector must match what it optimises.
+    pub fn with_optimiser_states(mut self, adam: AdamWState, codes: Vec<AdamWState>) -> Result<Self> {
+        let fits = |state: &AdamWState, len: usize| state.m.len() == len && state.v.len() == len;
+        if !fits(&adam, self.params.len())
+            || codes.len() != self.members.len()
+            || self.members.iter().zip(&codes).any(|(m, s)| !fits(s, m.code.len()))
+        {
+            return Err(CatmapError::Degenerate(
+                "category optimiser states do not match the field's parameters and codes".to_owned(),
+            ));
+        }
+        self.adam = adam;
+        for (member, state) in self.members.iter_mut().zip(codes) {
+            member.adam = state;
+        }
+        Ok(self)
+    }
+
     /// The code regulariser [`CODE_REG_WEIGHT`] · Σ_members (‖z_s‖ + ‖z_t‖) and its gradient,
     /// one `[∂/∂z_s ‖ ∂/∂z_t]` per member (0 for a zero code).
     pub(crate) fn code_reg(&self) -> (f32, Vec<Vec<f32>>) {

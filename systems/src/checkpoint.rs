@@ -1,0 +1,315 @@
+//! The mapper's whole state as a checkpoint, and back: every entity's components (objects, the
+//! background, categories), the fields with their optimiser moments and codes (as tensors), the
+//! generators, the stream position, the training counters and the stage times. Preview meshes
+//! are not kept (they are redrawn), camera frames never outlive a tick, and entities are
+//! restored by object id so that nothing depends on the order they were spawned in.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Duration;
+
+use bevy_ecs::prelude::*;
+use catmap::checkpoint::{
+    CategoryFieldHeader, OccupancyFieldHeader, TensorStore, load_category_field, load_occupancy_field,
+    store_category_field, store_occupancy_field,
+};
+use catmap::{CatmapError, ClassId, MapperConfig, ObjectId};
+use serde::{Deserialize, Serialize};
+
+use crate::category_fields::{CategoryFields, CategorySlot};
+use crate::components::{
+    Background, Category, ClassVotes, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Membership, Object,
+    ObjectBounds, ObjectClass, ObjectCloud, ObjectRng, Reliability, Subcategories, VisibleFrames,
+};
+use crate::resources::{
+    CategoryIndex, Fields, ObjectIndex, PhaseProgress, Settings, StageTimes, StreamProgress, TrainingQueue,
+};
+
+/// An entity's field: slot, generator and losses.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct FieldState {
+    slot: FieldSlot,
+    rng: FieldRng,
+    loss: FieldLoss,
+}
+
+/// One object entity.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct ObjectState {
+    object: Object,
+    class: ObjectClass,
+    votes: ClassVotes,
+    latest_box: LatestBox,
+    keyframes: Keyframes,
+    visible: VisibleFrames,
+    cloud: ObjectCloud,
+    rng: ObjectRng,
+    bounds: Option<ObjectBounds>,
+    field: Option<FieldState>,
+    reliability: Option<Reliability>,
+    membership: Option<Membership>,
+    category_slot: Option<CategorySlot>,
+}
+
+/// The background entity.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct BackgroundState {
+    keyframes: Keyframes,
+    visible: VisibleFrames,
+    cloud: ObjectCloud,
+    rng: ObjectRng,
+    field: Option<FieldState>,
+}
+
+/// One category entity.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct CategoryState {
+    category: Category,
+    subcategories: Option<Subcategories>,
+}
+
+/// The serde part of a checkpoint (the tensors go to the safetensors file).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub(crate) struct MapperState {
+    config: MapperConfig,
+    progress: StreamProgress,
+    queue: TrainingQueue,
+    phases: PhaseProgress,
+    stage_seconds: BTreeMap<String, f64>,
+    background: BackgroundState,
+    objects: Vec<ObjectState>,
+    categories: Vec<CategoryState>,
+    /// Owner of each object field, in batch order, and the fields' shapes.
+    object_fields: Vec<(ObjectId, OccupancyFieldHeader)>,
+    background_field: Option<OccupancyFieldHeader>,
+    /// Category fields: shape and member objects in code order.
+    category_fields: Vec<(CategoryFieldHeader, Vec<ObjectId>)>,
+    category_pending: u64,
+    category_steps: u64,
+    category_losses: Vec<f32>,
+    /// What the caller stored beside the mapper (e.g. the command line), as JSON.
+    pub(crate) extra: String,
+}
+
+/// Reads the world into a state and its tensors.
+pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, TensorStore), CatmapError> {
+    let mut tensors = TensorStore::new();
+    let mut objects: Vec<ObjectState> = world
+        .query_filtered::<(Entity, &Object), Without<Background>>()
+        .iter(world)
+        .map(|(entity, _)| entity)
+        .collect::<Vec<_>>()
+        .into_iter()
+        .map(|entity| object_state(world, entity))
+        .collect::<Result<_, _>>()?;
+    objects.sort_by_key(|o| o.object.id);
+    let background_entity = world
+        .query_filtered::<Entity, With<Background>>()
+        .single(world)
+        .map_err(|e| CatmapError::Degenerate(format!("no single background entity: {e}")))?;
+    let background = {
+        let e = world.entity(background_entity);
+        let need = || CatmapError::Degenerate("the background lacks a component".to_owned());
+        BackgroundState {
+            keyframes: e.get::<Keyframes>().ok_or_else(need)?.clone(),
+            visible: *e.get::<VisibleFrames>().ok_or_else(need)?,
+            cloud: e.get::<ObjectCloud>().ok_or_else(need)?.clone(),
+            rng: e.get::<ObjectRng>().ok_or_else(need)?.clone(),
+            field: field_state(e),
+        }
+    };
+    let mut categories: Vec<CategoryState> = world
+        .query::<(&Category, Option<&Subcategories>)>()
+        .iter(world)
+        .map(|(category, subcategories)| CategoryState {
+            category: category.clone(),
+            subcategories: subcategories.cloned(),
+        })
+        .collect();
+    categories.sort_by_key(|c| c.category.class);
+
+    let id_of = |entity: &Entity| world.get::<Object>(*entity).map(|o| o.id);
+    let fields = world.resource::<Fields>();
+    let mut object_fields = Vec::new();
+    for (index, (field, owner)) in fields.objects.fields().iter().zip(&fields.object_owners).enumerate() {
+        let id = id_of(owner).ok_or_else(|| CatmapError::Degenerate(format!("object field {index} has no owner")))?;
+        object_fields.push((
+            id,
+            store_occupancy_field(field, &format!("objects/{index}"), &mut tensors),
+        ));
+    }
+    let background_field = fields
+        .background
+        .field(0)
+        .map(|field| store_occupancy_field(field, "background", &mut tensors));
+    let category = world.resource::<CategoryFields>();
+    let mut category_fields = Vec::new();
+    for (k, (field, members)) in category.batch.fields().iter().zip(&category.members).enumerate() {
+        let header = store_category_field(field, &format!("categories/{k}"), &mut tensors);
+        let ids = members.iter().filter_map(id_of).collect();
+        category_fields.push((header, ids));
+    }
+    let state = MapperState {
+        config: world.resource::<Settings>().0.clone(),
+        progress: world.resource::<StreamProgress>().clone(),
+        queue: *world.resource::<TrainingQueue>(),
+        phases: *world.resource::<PhaseProgress>(),
+        stage_seconds: world
+            .resource::<StageTimes>()
+            .0
+            .iter()
+            .map(|(k, v)| (k.clone(), v.as_secs_f64()))
+            .collect(),
+        background,
+        objects,
+        categories,
+        object_fields,
+        background_field,
+        category_fields,
+        category_pending: category.pending,
+        category_steps: category.steps_done,
+        category_losses: category.losses.clone(),
+        extra,
+    };
+    Ok((state, tensors))
+}
+
+fn field_state(e: EntityRef) -> Option<FieldState> {
+    Some(FieldState {
+        slot: *e.get::<FieldSlot>()?,
+        rng: e.get::<FieldRng>()?.clone(),
+        loss: *e.get::<FieldLoss>()?,
+    })
+}
+
+fn object_state(world: &World, entity: Entity) -> Result<ObjectState, CatmapError> {
+    let e = world.entity(entity);
+    let need = |what: &str| CatmapError::Degenerate(format!("an object lacks its {what}"));
+    Ok(ObjectState {
+        object: *e.get::<Object>().ok_or_else(|| need("id"))?,
+        class: *e.get::<ObjectClass>().ok_or_else(|| need("class"))?,
+        votes: e.get::<ClassVotes>().ok_or_else(|| need("votes"))?.clone(),
+        latest_box: *e.get::<LatestBox>().ok_or_else(|| need("box"))?,
+        keyframes: e.get::<Keyframes>().ok_or_else(|| need("keyframes"))?.clone(),
+        visible: *e.get::<VisibleFrames>().ok_or_else(|| need("visible frames"))?,
+        cloud: e.get::<ObjectCloud>().ok_or_else(|| need("cloud"))?.clone(),
+        rng: e.get::<ObjectRng>().ok_or_else(|| need("generator"))?.clone(),
+        bounds: e.get::<ObjectBounds>().copied(),
+        field: field_state(e),
+        reliability: e.get::<Reliability>().cloned(),
+        membership: e.get::<Membership>().copied(),
+        category_slot: e.get::<CategorySlot>().copied(),
+    })
+}
+
+/// The configuration a checkpoint was taken with.
+pub(crate) fn config_of(state: &MapperState) -> &MapperConfig {
+    &state.config
+}
+
+/// Writes `state` and `tensors` into a mapper world freshly built from the state's config
+/// (`file` names the checkpoint in errors).
+pub(crate) fn restore(
+    world: &mut World,
+    state: MapperState,
+    mut tensors: TensorStore,
+    file: &Path,
+) -> Result<(), CatmapError> {
+    let bad = |reason: String| CatmapError::checkpoint(file, reason);
+    let background_entity = world
+        .query_filtered::<Entity, With<Background>>()
+        .single(world)
+        .map_err(|e| bad(format!("fresh mapper without background: {e}")))?;
+    let b = state.background;
+    let mut background = world.entity_mut(background_entity);
+    background.insert((b.keyframes, b.visible, b.cloud, b.rng));
+    if let Some(f) = b.field {
+        background.insert((f.slot, f.rng, f.loss));
+    }
+
+    let mut index = BTreeMap::new();
+    for o in state.objects {
+        let mut e = world.spawn((
+            o.object,
+            o.class,
+            o.votes,
+            o.latest_box,
+            o.keyframes,
+            o.visible,
+            o.cloud,
+            o.rng,
+        ));
+        if let Some(bounds) = o.bounds {
+            e.insert(bounds);
+        }
+        if let Some(f) = o.field {
+            e.insert((f.slot, f.rng, f.loss));
+        }
+        if let Some(reliability) = o.reliability {
+            e.insert(reliability);
+        }
+        if let Some(membership) = o.membership {
+            e.insert(membership);
+        }
+        if let Some(slot) = o.category_slot {
+            e.insert(slot);
+        }
+        index.insert(o.object.id, e.id());
+    }
+    let mut categories = BTreeMap::<ClassId, Entity>::new();
+    for c in state.categories {
+        let class = c.category.class;
+        let mut e = world.spawn(c.category);
+        if let Some(subcategories) = c.subcategories {
+            e.insert(subcategories);
+        }
+        categories.insert(class, e.id());
+    }
+    let entity_of = |id: &ObjectId| index.get(id).copied().ok_or_else(|| bad(format!("no object {id}")));
+
+    let mut fields = world.resource_mut::<Fields>();
+    for (i, (id, header)) in state.object_fields.iter().enumerate() {
+        let field = load_occupancy_field(header, &format!("objects/{i}"), &mut tensors, file)?;
+        fields.objects.push(field);
+        fields.object_owners.push(entity_of(id)?);
+    }
+    if let Some(header) = &state.background_field {
+        fields
+            .background
+            .push(load_occupancy_field(header, "background", &mut tensors, file)?);
+        fields.background_owner = Some(background_entity);
+    }
+    let mut category = world.resource_mut::<CategoryFields>();
+    for (k, (header, ids)) in state.category_fields.iter().enumerate() {
+        category.batch.push(load_category_field(
+            header,
+            &format!("categories/{k}"),
+            &mut tensors,
+            file,
+        )?);
+        category
+            .members
+            .push(ids.iter().map(entity_of).collect::<Result<_, _>>()?);
+    }
+    category.pending = state.category_pending;
+    category.steps_done = state.category_steps;
+    category.losses = state.category_losses;
+    if !tensors.is_empty() {
+        let unused: Vec<_> = tensors.names().collect();
+        return Err(bad(format!("tensors nobody owns: {unused:?}")));
+    }
+
+    world.insert_resource(ObjectIndex(index));
+    world.insert_resource(CategoryIndex(categories));
+    world.insert_resource(state.progress);
+    world.insert_resource(state.queue);
+    world.insert_resource(state.phases);
+    world.insert_resource(StageTimes(
+        state
+            .stage_seconds
+            .into_iter()
+            .map(|(k, v)| (k, Duration::from_secs_f64(v.max(0.0))))
+            .collect(),
+    ));
+    Ok(())
+}

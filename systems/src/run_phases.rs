@@ -1,0 +1,258 @@
+//! The phases of `catmap run` — stream, training after the stream, category fields, outputs —
+//! with a checkpoint every few frames or steps and on Ctrl-C, and `--resume` from the latest one.
+
+use std::ops::ControlFlow;
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use anyhow::Context as _;
+use catmap::CatmapError;
+use catmap::config::CheckpointConfig;
+use catmap::dataset::FrameSource;
+use catmap::stream::{FrameStream, stream_positions};
+use catmap_systems::Mapper;
+use catmap_systems::summary::RunSummary;
+
+use crate::progress::bar;
+use crate::run_plan::RunPlan;
+
+/// Exit code of a run stopped by Ctrl-C after saving its checkpoint (128 + SIGINT).
+const INTERRUPTED_EXIT: i32 = 130;
+
+/// Continues the run whose output folder is `out` from its checkpoint.
+pub fn resume(out: &Path) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let dir = out.join("checkpoint");
+    let (mapper, extra) = Mapper::resume(&dir, None)
+        .with_context(|| format!("cannot resume from {} (no usable checkpoint)", dir.display()))?;
+    let plan: RunPlan =
+        serde_json::from_str(&extra).with_context(|| format!("{}: the run plan is unreadable", dir.display()))?;
+    let manifest = catmap::checkpoint::read_manifest(&dir)?;
+    tracing::info!(checkpoint = %dir.display(), at = %manifest.label, "resuming");
+    let source = plan.open_source(mapper.config())?;
+    drive(mapper, plan, source, started)
+}
+
+/// Runs every remaining phase of `mapper` (fresh or resumed) and writes the outputs.
+pub fn drive(mut mapper: Mapper, plan: RunPlan, source: Arc<dyn FrameSource>, started: Instant) -> anyhow::Result<()> {
+    let config = mapper.config().clone();
+    let positions = stream_positions(source.len(), config.stream.stride, config.stream.max_frames);
+    anyhow::ensure!(!positions.is_empty(), "{} has no frames to map", source.name());
+    let mut checkpoints = Checkpoints::new(&plan, config.checkpoint.clone(), started);
+    mapper.set_recording(plan.open_recording()?);
+
+    let consumed = mapper.positions_consumed().min(positions.len());
+    let stream = (!mapper.stream_ended()).then(|| {
+        tracing::info!(dataset = %source.name(), frames = positions.len(), from = consumed, "mapping");
+        let stream = FrameStream::spawn(
+            Arc::clone(&source),
+            positions[consumed..].to_vec(),
+            config.stream.channel_capacity,
+        );
+        mapper.attach_inbox(stream.receiver.clone());
+        stream
+    });
+    let progress = bar(positions.len() as u64, "mapping");
+    progress.set_position(consumed as u64);
+    let every_frames = checkpoints.every_frames();
+    while !mapper.run_until(|frames| {
+        progress.set_position(frames);
+        checkpoints.break_if(frames.is_multiple_of(every_frames))
+    }) {
+        let label = format!("frame {} of {}", mapper.positions_consumed(), positions.len());
+        checkpoints.save(&mut mapper, &label)?;
+    }
+    progress.finish_and_clear();
+    if let Some(stream) = stream {
+        stream.join();
+    }
+
+    let after_stream = config.fields.steps_after_stream() as u64;
+    let every_steps = checkpoints.every_steps();
+    if after_stream > 0 {
+        let what = if config.fields.offline { "training" } else { "refining" };
+        let progress = bar(after_stream, what);
+        while !mapper.train_after_stream_until(|done, _| {
+            progress.set_position(done);
+            checkpoints.break_if(done.is_multiple_of(every_steps))
+        }) {
+            let label = format!("{what}, {} steps", mapper.training_steps());
+            checkpoints.save(&mut mapper, &label)?;
+        }
+        progress.finish_and_clear();
+    }
+    if config.category_fields.enabled {
+        let progress = bar(config.category_fields.iterations as u64, "category fields");
+        while !mapper.train_categories_until(|done, _| {
+            progress.set_position(done);
+            checkpoints.break_if(done.is_multiple_of(every_steps))
+        }) {
+            checkpoints.save(&mut mapper, "category fields")?;
+        }
+        progress.finish_and_clear();
+        tracing::info!(
+            category_fields = mapper.category_field_count(),
+            "category fields trained"
+        );
+    }
+    write_outputs(mapper, &plan, source.name(), started)?;
+    checkpoints.remove_after_success();
+    Ok(())
+}
+
+/// Writes categories.json, the meshes, metrics.json and summary.json; completes the recording.
+fn write_outputs(mut mapper: Mapper, plan: &RunPlan, dataset_name: String, started: Instant) -> anyhow::Result<()> {
+    let config = mapper.config().clone();
+    let mut extra_seconds = std::collections::BTreeMap::new();
+    if config.fields.enabled {
+        let path = plan.out.join("categories.json");
+        catmap_systems::categories_report::write_category_records(&mapper.category_records(), &path)?;
+        tracing::info!(path = %path.display(), "categories written");
+        let meshes = mapper.extract_final_meshes();
+        let dir = plan.out.join("meshes");
+        let written = meshes.write_dir(&dir)?;
+        tracing::info!(files = written, dir = %dir.display(), "meshes written");
+        if plan.dataset.join("gt_meshes").is_dir() {
+            let started = Instant::now();
+            evaluate_run(&dir, &plan.dataset, config.seed, &plan.out.join("metrics.json"))?;
+            extra_seconds.insert("eval".to_owned(), started.elapsed().as_secs_f64());
+        }
+    }
+    let mut stage_seconds = mapper.stage_seconds();
+    if let Some(stats) = mapper.stream_stats() {
+        stage_seconds.insert("read (reader thread)".to_owned(), stats.decode_time.as_secs_f64());
+    }
+    stage_seconds.extend(extra_seconds);
+    let training_steps = mapper.training_steps();
+    let map = mapper.finish();
+    plan.complete_recording()?;
+    let total = plan.seconds_before + started.elapsed().as_secs_f64();
+    let mut summary = RunSummary::new(dataset_name, &map, stage_seconds, total);
+    let protocol = if config.fields.offline {
+        " (offline)"
+    } else {
+        " (online)"
+    };
+    summary.mode = format!("{:?}{protocol}", plan.mode).to_lowercase();
+    summary.training_steps = training_steps;
+    let summary_path = plan.out.join("summary.json");
+    summary.write_json(&summary_path)?;
+    crate::print_stdout(&summary.table());
+    tracing::info!(summary = %summary_path.display(), "done");
+    Ok(())
+}
+
+/// Scores the written meshes against the dataset's ground truth: `metrics.json` and a table.
+fn evaluate_run(meshes: &Path, dataset: &Path, seed: u64, json: &Path) -> anyhow::Result<()> {
+    let report = catmap::metrics::evaluate_dirs(meshes, dataset, catmap::metrics::Crop::Paper, seed)
+        .with_context(|| format!("cannot evaluate {} against {}", meshes.display(), dataset.display()))?;
+    let mut text = serde_json::to_string_pretty(&report).context("cannot serialise the metrics")?;
+    text.push('\n');
+    catmap::atomic_file::write_atomic(json, text.as_bytes())
+        .with_context(|| format!("cannot write {}", json.display()))?;
+    crate::print_stdout(&catmap::metrics::render_markdown(&report));
+    tracing::info!(metrics = %json.display(), "evaluation written");
+    Ok(())
+}
+
+/// When and where checkpoints are written, and whether Ctrl-C was pressed.
+struct Checkpoints {
+    plan: RunPlan,
+    cfg: CheckpointConfig,
+    started: Instant,
+    interrupted: Arc<AtomicBool>,
+}
+
+impl Checkpoints {
+    fn new(plan: &RunPlan, cfg: CheckpointConfig, started: Instant) -> Self {
+        let interrupted = Arc::new(AtomicBool::new(false));
+        let flag = Arc::clone(&interrupted);
+        // A first Ctrl-C asks for a checkpoint at the next step; a second one quits at once.
+        let installed = ctrlc::set_handler(move || {
+            if flag.swap(true, Ordering::SeqCst) {
+                std::process::exit(INTERRUPTED_EXIT);
+            }
+        });
+        if let Err(e) = installed {
+            tracing::warn!(error = %e, "Ctrl-C will not save a checkpoint");
+        }
+        Self {
+            plan: plan.clone(),
+            cfg,
+            started,
+            interrupted,
+        }
+    }
+
+    /// Frames between checkpoints (`u64::MAX` when disabled).
+    fn every_frames(&self) -> u64 {
+        if self.cfg.enabled && self.cfg.every_frames > 0 {
+            self.cfg.every_frames
+        } else {
+            u64::MAX
+        }
+    }
+
+    /// Steps between checkpoints, rounded up to whole chunks (`u64::MAX` when disabled).
+    fn every_steps(&self) -> u64 {
+        let chunk = catmap_systems::mapper::CHUNK_STEPS;
+        if self.cfg.enabled && self.cfg.every_steps > 0 {
+            self.cfg.every_steps.div_ceil(chunk) * chunk
+        } else {
+            u64::MAX
+        }
+    }
+
+    /// Break when a checkpoint is due or Ctrl-C was pressed.
+    fn break_if(&self, due: bool) -> ControlFlow<()> {
+        if due || self.interrupted.load(Ordering::SeqCst) {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    }
+
+    /// Writes a checkpoint (when enabled); after Ctrl-C, exits.
+    fn save(&mut self, mapper: &mut Mapper, label: &str) -> anyhow::Result<()> {
+        let interrupted = self.interrupted.load(Ordering::SeqCst);
+        if self.cfg.enabled || interrupted {
+            let dir = self.plan.checkpoint_dir();
+            let plan = RunPlan {
+                seconds_before: self.plan.seconds_before + self.started.elapsed().as_secs_f64(),
+                ..self.plan.clone()
+            };
+            let extra = serde_json::to_string(&plan).context("cannot encode the run plan")?;
+            let started = Instant::now();
+            mapper
+                .save_checkpoint(&dir, label, extra)
+                .with_context(|| format!("cannot write a checkpoint to {}", dir.display()))?;
+            tracing::debug!(
+                at = label,
+                seconds = started.elapsed().as_secs_f64(),
+                "checkpoint written"
+            );
+        }
+        if interrupted {
+            tracing::warn!(
+                at = label,
+                "interrupted; continue with: catmap run --resume {}",
+                self.plan.out.display()
+            );
+            std::process::exit(INTERRUPTED_EXIT);
+        }
+        Ok(())
+    }
+
+    /// Deletes the checkpoint once the run has completed, unless `checkpoint.keep`.
+    fn remove_after_success(&self) {
+        let dir = self.plan.checkpoint_dir();
+        if self.cfg.keep || !dir.exists() {
+            return;
+        }
+        if let Err(e) = std::fs::remove_dir_all(&dir) {
+            tracing::warn!(dir = %dir.display(), error = %CatmapError::io(&dir, e), "cannot remove the checkpoint");
+        }
+    }
+}

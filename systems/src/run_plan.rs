@@ -1,0 +1,108 @@
+//! [`RunPlan`]: what `catmap run` was asked to do, kept in each checkpoint so that
+//! `catmap run --resume OUT` can continue without the original command line.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use anyhow::Context as _;
+use catmap::dataset::FrameSource;
+use catmap::dataset::camera_spec::parse_camera_spec;
+use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
+use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
+use serde::{Deserialize, Serialize};
+
+use crate::cli_run::{DatasetFormat, MapMode};
+
+/// Where the Rerun recording goes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Recording {
+    /// Saved to this file (written as `FILE.tmp`, renamed when the run completes).
+    Save(PathBuf),
+    /// Streamed to a viewer at this address.
+    Connect(String),
+}
+
+/// The run's inputs and outputs besides the mapper configuration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunPlan {
+    /// Dataset folder (the synthetic scene written to OUT/scene when none was given).
+    pub dataset: PathBuf,
+    /// Its layout.
+    pub format: DatasetFormat,
+    /// `--camera`, if given.
+    pub camera: Option<String>,
+    /// Output folder.
+    pub out: PathBuf,
+    /// Field model.
+    pub mode: MapMode,
+    /// The Rerun recording.
+    pub recording: Recording,
+    /// Wall-clock seconds spent by earlier (interrupted) processes of this run.
+    pub seconds_before: f64,
+}
+
+impl RunPlan {
+    /// The checkpoint folder.
+    pub fn checkpoint_dir(&self) -> PathBuf {
+        self.out.join("checkpoint")
+    }
+
+    /// Opens the dataset as a frame source.
+    pub fn open_source(&self, config: &catmap::MapperConfig) -> anyhow::Result<Arc<dyn FrameSource>> {
+        let camera = self
+            .camera
+            .as_deref()
+            .map(parse_camera_spec)
+            .transpose()
+            .context("--camera")?;
+        let dir = &self.dataset;
+        Ok(match self.format {
+            DatasetFormat::Replica => {
+                let options = ReplicaOptions {
+                    camera,
+                    ..ReplicaOptions::from_config(&config.dataset)
+                };
+                Arc::new(ReplicaSequence::open(dir, &options)?)
+            }
+            DatasetFormat::Scannet => {
+                anyhow::ensure!(camera.is_none(), "--camera applies to the Replica layout only");
+                let options = ScanNetOptions {
+                    depth_scale: config.dataset.depth_scale,
+                    max_depth_m: config.dataset.max_depth_m,
+                    ..ScanNetOptions::default()
+                };
+                Arc::new(ScanNetSequence::open(dir, &options)?)
+            }
+        })
+    }
+
+    /// Opens the recording: a connection, or the temporary sibling of the file (see
+    /// [`RunPlan::complete_recording`]).
+    pub fn open_recording(&self) -> anyhow::Result<rerun::RecordingStream> {
+        let builder = rerun::RecordingStreamBuilder::new("catmap");
+        match &self.recording {
+            Recording::Connect(url) => builder
+                .connect_grpc_opts(url.clone())
+                .with_context(|| format!("cannot connect to Rerun at {url}")),
+            Recording::Save(path) => {
+                if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+                    std::fs::create_dir_all(parent).with_context(|| format!("cannot create {}", parent.display()))?;
+                }
+                let temp = catmap::atomic_file::temp_path_for(path);
+                builder
+                    .save(&temp)
+                    .with_context(|| format!("cannot write the Rerun recording {}", temp.display()))
+            }
+        }
+    }
+
+    /// Renames the finished recording file into place (after the recording was flushed).
+    pub fn complete_recording(&self) -> anyhow::Result<()> {
+        if let Recording::Save(path) = &self.recording {
+            let temp = catmap::atomic_file::temp_path_for(path);
+            std::fs::rename(&temp, path)
+                .with_context(|| format!("cannot move {} to {}", temp.display(), path.display()))?;
+        }
+        Ok(())
+    }
+}
