@@ -101,6 +101,15 @@ pub fn read_checkpoint<T: DeserializeOwned>(dir: &Path) -> Result<LoadedCheckpoi
     })
 }
 
+/// Checks that the current generation in `dir` is complete and intact (sizes and CRC-32s)
+/// without decoding it; returns its manifest.
+pub fn verify_checkpoint(dir: &Path) -> Result<CheckpointManifest> {
+    let manifest = read_manifest(dir)?;
+    read_part(dir, &manifest.state)?;
+    read_part(dir, &manifest.tensors)?;
+    Ok(manifest)
+}
+
 /// Reads the manifest of `dir` (without verifying the files it names).
 pub fn read_manifest(dir: &Path) -> Result<CheckpointManifest> {
     let path = dir.join(MANIFEST);
@@ -251,6 +260,7 @@ mod tests {
         let next = manifest.generation + 1;
         std::fs::write(dir.path().join(format!("state-{next}.bin.tmp")), [1, 2, 3]).expect("writes");
         std::fs::write(dir.path().join("checkpoint.json.tmp"), "{\"form").expect("writes");
+        assert_eq!(verify_checkpoint(dir.path()).expect("intact"), manifest);
         let loaded: LoadedCheckpoint<u32> = read_checkpoint(dir.path()).expect("reads the intact generation");
         assert_eq!(loaded.state, 5);
         let newer = write_checkpoint(dir.path(), &6u32, &store(3.0), "y").expect("writes");

@@ -15,6 +15,6 @@ pub use fields::{
 };
 pub use files::{
     CheckpointFile, CheckpointManifest, FORMAT, LoadedCheckpoint, MANIFEST, read_checkpoint, read_manifest,
-    write_checkpoint,
+    verify_checkpoint, write_checkpoint,
 };
 pub use tensor_store::TensorStore;

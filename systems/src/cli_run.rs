@@ -133,11 +133,17 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
                 .unwrap_or_else(|| args.out.join("recording.rrd")),
         ),
     };
+    // Absolute paths, so that `--resume` works from any folder.
+    let absolute = |p: &std::path::Path| std::path::absolute(p).with_context(|| format!("bad path {}", p.display()));
+    let recording = match recording {
+        Recording::Save(path) => Recording::Save(absolute(&path)?),
+        connect => connect,
+    };
     let plan = RunPlan {
-        dataset,
+        dataset: absolute(&dataset)?,
         format: args.format,
         camera: args.camera.clone(),
-        out: args.out.clone(),
+        out: absolute(&args.out)?,
         mode: args.mode,
         recording,
         seconds_before: 0.0,

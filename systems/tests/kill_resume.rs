@@ -1,0 +1,215 @@
+//! `catmap run` killed with SIGKILL at random moments (checkpoints every 2 frames and every 50
+//! steps, so some kills land inside a checkpoint write) and continued each time with
+//! `catmap run --resume`: after every kill the checkpoint on disk is intact and no output file
+//! is half-written; the final meshes, categories.json and metrics.json equal those of a run that
+//! was never interrupted, byte for byte.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use catmap::checkpoint::{MANIFEST, verify_checkpoint};
+use catmap::mesh::TriangleMesh;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const CONFIG: &str = r#"
+seed = 2
+
+[stream]
+stride = 2
+
+[fields]
+steps_per_frame = 3
+final_steps = 100
+
+[categories]
+min_field_steps = 20
+
+[category_fields]
+iterations = 100
+
+[meshes]
+background_voxel_m = 0.1
+
+[meshes.object]
+voxel_size_m = 0.04
+
+[checkpoint]
+every_frames = 2
+every_steps = 50
+"#;
+
+fn catmap() -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_catmap"));
+    command
+        .env("RUST_LOG", "warn")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null());
+    command
+}
+
+fn run_args(command: &mut Command, work: &Path, out: &Path) {
+    command
+        .arg("run")
+        .arg("--dataset")
+        .arg(work.join("scene"))
+        .arg("--config")
+        .arg(work.join("config.toml"))
+        .arg("--mode")
+        .arg("category")
+        .arg("--out")
+        .arg(out);
+}
+
+/// Every finished output file under `out` is whole: JSON parses, PLY reads; `.tmp` files are
+/// the only unfinished ones. The checkpoint, if any, verifies.
+fn assert_outputs_whole(out: &Path) {
+    let mut stack = vec![out.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).expect("lists") {
+            let path = entry.expect("entry").path();
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default().to_owned();
+            if path.is_dir() {
+                stack.push(path);
+            } else if name.ends_with(".json") {
+                let text = std::fs::read_to_string(&path).expect("reads");
+                serde_json::from_str::<serde_json::Value>(&text)
+                    .unwrap_or_else(|e| panic!("{} is not whole JSON: {e}", path.display()));
+            } else if name.ends_with(".ply") {
+                TriangleMesh::read_ply(&path).unwrap_or_else(|e| panic!("{} is not a whole PLY: {e}", path.display()));
+            }
+        }
+    }
+    let checkpoint = out.join("checkpoint");
+    if checkpoint.join(MANIFEST).exists() {
+        verify_checkpoint(&checkpoint).unwrap_or_else(|e| panic!("the checkpoint on disk is damaged: {e}"));
+    }
+}
+
+/// Whether a checkpoint file is being written (a `.tmp` file exists in the folder).
+fn writing(checkpoint: &Path) -> bool {
+    std::fs::read_dir(checkpoint).is_ok_and(|entries| {
+        entries
+            .filter_map(Result::ok)
+            .any(|e| e.path().extension() == Some("tmp".as_ref()))
+    })
+}
+
+fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .expect("lists")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn a_run_killed_at_random_moments_and_resumed_ends_like_an_uninterrupted_one() {
+    let work = tempfile::tempdir().expect("temp dir");
+    let work = work.path();
+    std::fs::write(work.join("config.toml"), CONFIG).expect("config written");
+    let status = catmap()
+        .args(["synth", "--preset", "small", "--seed", "4", "--out"])
+        .arg(work.join("scene"))
+        .status()
+        .expect("catmap runs");
+    assert!(status.success(), "synth");
+
+    let reference = work.join("reference");
+    let started = Instant::now();
+    let mut command = catmap();
+    run_args(&mut command, work, &reference);
+    assert!(command.status().expect("catmap runs").success(), "uninterrupted run");
+    let full = started.elapsed();
+    assert!(
+        !reference.join("checkpoint").exists(),
+        "the checkpoint is removed after success"
+    );
+
+    let killed = work.join("killed");
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let (mut kills, mut resumes, mut torn_writes) = (0, 0, 0);
+    loop {
+        let mut command = catmap();
+        if killed.join("checkpoint").join(MANIFEST).exists() {
+            command.arg("run").arg("--resume").arg(&killed);
+            resumes += 1;
+        } else {
+            run_args(&mut command, work, &killed);
+        }
+        let mut child = command.spawn().expect("catmap starts");
+        // Odd kills land as soon as a checkpoint file is being written; even ones at a random time.
+        let at_write = kills % 2 == 1;
+        let limit = Duration::from_secs_f64(rng.random_range(0.1..0.4) * full.as_secs_f64());
+        let checkpoint = killed.join("checkpoint");
+        let started = Instant::now();
+        let status = loop {
+            if let Some(status) = child.try_wait().expect("waits") {
+                break Some(status);
+            }
+            let due = kills < 8
+                && if at_write {
+                    writing(&checkpoint) || started.elapsed() >= 2 * limit
+                } else {
+                    started.elapsed() >= limit
+                };
+            if due {
+                child.kill().expect("SIGKILL");
+                child.wait().expect("reaped");
+                break None;
+            }
+            if !at_write {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        };
+        match status {
+            Some(status) => {
+                assert!(status.success(), "a resumed run completes");
+                break;
+            }
+            None => {
+                kills += 1;
+                let checkpoint = killed.join("checkpoint");
+                if checkpoint.exists()
+                    && files_under(&checkpoint)
+                        .iter()
+                        .any(|p| p.extension() == Some("tmp".as_ref()))
+                {
+                    torn_writes += 1;
+                }
+                assert_outputs_whole(&killed);
+            }
+        }
+    }
+    println!("{kills} kills ({torn_writes} inside a checkpoint write), {resumes} resumes; full run {full:?}");
+    assert!(kills >= 2 && resumes >= 1, "the run was interrupted and resumed");
+    assert!(
+        !killed.join("checkpoint").exists(),
+        "the checkpoint is removed after success"
+    );
+
+    let meshes: Vec<_> = files_under(&reference.join("meshes"));
+    assert!(meshes.len() >= 5, "meshes written: {meshes:?}");
+    let names = |files: &[PathBuf]| {
+        files
+            .iter()
+            .map(|p| p.file_name().map(|n| n.to_owned()))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(names(&files_under(&killed.join("meshes"))), names(&meshes));
+    for file in meshes
+        .iter()
+        .map(|p| PathBuf::from("meshes").join(p.file_name().expect("name")))
+        .chain(["categories.json".into(), "metrics.json".into()])
+    {
+        let a = std::fs::read(reference.join(&file)).expect("reference output");
+        let b = std::fs::read(killed.join(&file)).expect("resumed output");
+        assert!(
+            a == b,
+            "{} differs between the uninterrupted and the resumed run",
+            file.display()
+        );
+    }
+}
