@@ -16,6 +16,7 @@ pub use frame::{CameraIntrinsics, InstanceLabel, InstanceMask, RgbdFrame, Shared
 pub use ids::{ClassId, FrameIndex, ObjectId};
 pub mod atomic_file;
 pub mod category;
+pub mod category_field_plan;
 pub mod checkpoint;
 pub mod class_registration;
 pub mod field;

@@ -21,6 +21,8 @@ pub enum RngStream {
     ObjectField(ObjectId),
     /// The k-th category field: initial weights and codes.
     CategoryField(u32),
+    /// The k-th remapping of category members (fresh codes of members joining a field).
+    CategoryCodes(u32),
 }
 
 /// Field streams start here, above every object stream.
@@ -36,6 +38,7 @@ pub fn seeded_rng(seed: u64, stream: RngStream) -> ChaCha8Rng {
         RngStream::BackgroundField => FIELD_STREAMS + 1,
         RngStream::ObjectField(ObjectId(id)) => FIELD_STREAMS + 2 + u64::from(id),
         RngStream::CategoryField(k) => 2 * FIELD_STREAMS + u64::from(k),
+        RngStream::CategoryCodes(k) => 3 * FIELD_STREAMS + u64::from(k),
     });
     rng
 }

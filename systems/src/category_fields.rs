@@ -3,7 +3,11 @@
 //! are its objects, each sampled in its own NOCS frame; all category fields train as one batch.
 //! Single-member subcategories keep their per-object fields.
 
+use std::collections::BTreeMap;
+
 use bevy_ecs::prelude::*;
+use catmap::ObjectId;
+use catmap::category_field_plan::plan_category_fields;
 use catmap::field::category::{CategoryBatch, CategoryField, CategorySamples};
 use catmap::field::{AdamWConfig, sample_training_rays};
 use catmap::nocs::NocsFrame;
@@ -19,13 +23,17 @@ pub struct CategoryFields {
     /// One field per multi-member subcategory, trained together.
     pub batch: CategoryBatch,
     /// Per field, its members in code order.
-    pub members: Vec<Vec<Entity>>,
+    pub members: Vec<Vec<ObjectId>>,
     /// Steps queued and not yet run.
     pub pending: u64,
     /// Steps run.
     pub steps_done: u64,
     /// Latest total loss per field.
     pub losses: Vec<f32>,
+    /// Fields created so far (seeds the next one's generator).
+    pub fields_created: u32,
+    /// Membership changes applied so far (seeds the fresh codes of the next one).
+    pub remaps: u32,
 }
 
 impl CategoryFields {
@@ -37,6 +45,8 @@ impl CategoryFields {
             pending: 0,
             steps_done: 0,
             losses: Vec::new(),
+            fields_created: 0,
+            remaps: 0,
         }
     }
 }
@@ -52,48 +62,110 @@ pub struct CategorySlot {
     pub nocs: NocsFrame,
 }
 
-/// Creates the category fields from the registered subcategories (classes in id order), once:
-/// membership is fixed for the category phase.
-pub fn attach_category_fields(
+/// Keeps one category field per multi-member subcategory (subcategories ordered by
+/// representative), whenever a registration changed: creates the fields the first time and,
+/// when a re-registration changes the membership (online), continues each field with the
+/// subcategory sharing most of its members (`catmap::category_field_plan`): members keep their
+/// codes where they can, and no other field or object loses its training. Every member's slot
+/// follows its latest NOCS frame.
+pub fn sync_category_fields(
     settings: Res<Settings>,
     mut fields: ResMut<CategoryFields>,
-    categories: Query<&Subcategories>,
-    objects: Query<(Entity, &Object)>,
+    categories: Query<Ref<Subcategories>>,
+    objects: Query<(Entity, &Object, Option<&CategorySlot>)>,
     mut commands: Commands,
 ) {
     let cfg = &settings.0.category_fields;
-    if !cfg.enabled || !fields.members.is_empty() {
+    if !cfg.enabled || !categories.iter().any(|s| s.is_changed()) {
         return;
     }
-    let entity_of: std::collections::BTreeMap<_, _> = objects.iter().map(|(e, o)| (o.id, e)).collect();
-    let mut groups: Vec<_> = categories.iter().flat_map(|s| s.groups.iter()).collect();
-    groups.sort_by_key(|g| g.representative);
-    for group in groups.into_iter().filter(|g| g.members.len() > 1) {
-        let k = fields.members.len();
-        let mut rng = seeded_rng(settings.0.seed, RngStream::CategoryField(k as u32));
-        let field = CategoryField::new(
-            catmap::field::category::CATEGORY_HIDDEN,
-            cfg.code_dim,
-            1.0,
-            group.members.len(),
-            &mut rng,
-        );
-        fields.batch.push(field);
-        let mut members = Vec::new();
-        for (member, (id, registered)) in group.members.iter().enumerate() {
-            let Some(&entity) = entity_of.get(id) else { continue };
-            commands.entity(entity).insert(CategorySlot {
-                field: k,
-                member,
-                nocs: registered.nocs,
-            });
-            members.push(entity);
+    let mut groups: Vec<(ObjectId, Vec<(ObjectId, NocsFrame)>)> = categories
+        .iter()
+        .flat_map(|s| {
+            s.groups
+                .iter()
+                .filter(|g| g.members.len() > 1)
+                .map(|g| {
+                    (
+                        g.representative,
+                        g.members.iter().map(|(id, m)| (*id, m.nocs)).collect(),
+                    )
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    groups.sort_by_key(|(representative, _)| *representative);
+    let wanted: Vec<Vec<ObjectId>> = groups
+        .iter()
+        .map(|(_, m)| m.iter().map(|(id, _)| *id).collect())
+        .collect();
+    let seed = settings.0.seed;
+    let fields = &mut *fields;
+    if wanted != fields.members {
+        let plan = plan_category_fields(&fields.members, &wanted);
+        let mut old: Vec<Option<CategoryField>> = Vec::new();
+        while let Some(field) = fields.batch.remove(0) {
+            old.push(Some(field));
         }
-        tracing::info!(field = k, representative = %group.representative, members = members.len(), "category field created");
-        fields.members.push(members);
+        let mut codes_rng = seeded_rng(seed, RngStream::CategoryCodes(fields.remaps));
+        fields.remaps += 1;
+        for planned in &plan {
+            let continued = planned.continues.and_then(|i| old.get_mut(i).and_then(Option::take));
+            let field = match continued {
+                Some(mut field) => match field.remap_members(&planned.codes, &mut codes_rng) {
+                    Ok(()) => field,
+                    Err(e) => {
+                        tracing::warn!(error = %e, "category field restarted");
+                        new_field(seed, cfg.code_dim, planned.members.len(), &mut fields.fields_created)
+                    }
+                },
+                None => new_field(seed, cfg.code_dim, planned.members.len(), &mut fields.fields_created),
+            };
+            fields.batch.push(field);
+            tracing::info!(
+                field = fields.batch.len() - 1,
+                members = ?planned.members,
+                continues = ?planned.continues,
+                "category field"
+            );
+        }
+        fields.members = wanted;
+        fields.losses = vec![f32::NAN; fields.members.len()];
     }
-    let n = fields.members.len();
-    fields.losses = vec![f32::NAN; n];
+    let nocs: BTreeMap<ObjectId, NocsFrame> = groups.into_iter().flat_map(|(_, m)| m).collect();
+    let places: BTreeMap<ObjectId, (usize, usize)> = fields
+        .members
+        .iter()
+        .enumerate()
+        .flat_map(|(k, m)| m.iter().enumerate().map(move |(j, id)| (*id, (k, j))))
+        .collect();
+    for (entity, object, slot) in &objects {
+        match (places.get(&object.id), nocs.get(&object.id)) {
+            (Some(&(field, member)), Some(&nocs)) => {
+                let wanted = CategorySlot { field, member, nocs };
+                if slot != Some(&wanted) {
+                    commands.entity(entity).insert(wanted);
+                }
+            }
+            _ if slot.is_some() => {
+                commands.entity(entity).remove::<CategorySlot>();
+            }
+            _ => {}
+        }
+    }
+}
+
+/// A fresh category field (the `created`-th one) with `members` members.
+fn new_field(seed: u64, code_dim: usize, members: usize, created: &mut u32) -> CategoryField {
+    let mut rng = seeded_rng(seed, RngStream::CategoryField(*created));
+    *created += 1;
+    CategoryField::new(
+        catmap::field::category::CATEGORY_HIDDEN,
+        code_dim,
+        1.0,
+        members,
+        &mut rng,
+    )
 }
 
 /// Runs the queued category steps: every member samples its rays from its keyframes (members in

@@ -87,6 +87,8 @@ pub(crate) struct MapperState {
     category_pending: u64,
     category_steps: u64,
     category_losses: Vec<f32>,
+    category_fields_created: u32,
+    category_remaps: u32,
     /// What the caller stored beside the mapper (e.g. the command line), as JSON.
     pub(crate) extra: String,
 }
@@ -146,8 +148,7 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
     let mut category_fields = Vec::new();
     for (k, (field, members)) in category.batch.fields().iter().zip(&category.members).enumerate() {
         let header = store_category_field(field, &format!("categories/{k}"), &mut tensors);
-        let ids = members.iter().filter_map(id_of).collect();
-        category_fields.push((header, ids));
+        category_fields.push((header, members.clone()));
     }
     let state = MapperState {
         config: world.resource::<Settings>().0.clone(),
@@ -169,6 +170,8 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
         category_pending: category.pending,
         category_steps: category.steps_done,
         category_losses: category.losses.clone(),
+        category_fields_created: category.fields_created,
+        category_remaps: category.remaps,
         extra,
     };
     Ok((state, tensors))
@@ -287,13 +290,16 @@ pub(crate) fn restore(
             &mut tensors,
             file,
         )?);
-        category
-            .members
-            .push(ids.iter().map(entity_of).collect::<Result<_, _>>()?);
+        for id in ids {
+            entity_of(id)?;
+        }
+        category.members.push(ids.clone());
     }
     category.pending = state.category_pending;
     category.steps_done = state.category_steps;
     category.losses = state.category_losses;
+    category.fields_created = state.category_fields_created;
+    category.remaps = state.category_remaps;
     if !tensors.is_empty() {
         let unused: Vec<_> = tensors.names().collect();
         return Err(bad(format!("tensors nobody owns: {unused:?}")));

@@ -4,7 +4,7 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, SingleThreadedExecutor};
 
 use crate::categorize::update_categories;
-use crate::category_fields::{attach_category_fields, train_category_fields};
+use crate::category_fields::{sync_category_fields, train_category_fields};
 use crate::cleanup::despawn_consumed_frames;
 use crate::clouds::{accumulate_clouds, refresh_object_bounds};
 use crate::ingest::ingest_frames;
@@ -79,10 +79,12 @@ pub fn build_schedule() -> Schedule {
             .chain()
             .in_set(MapperSystems::Map),
         update_categories.in_set(MapperSystems::Categorize),
-        (attach_fields, queue_online_steps, train_fields)
+        (attach_fields, queue_online_steps, train_fields, train_category_fields)
             .chain()
             .in_set(MapperSystems::Train),
-        register_categories.in_set(MapperSystems::Register),
+        (register_categories, sync_category_fields.run_if(online_category_mode))
+            .chain()
+            .in_set(MapperSystems::Register),
         extract_preview_meshes.in_set(MapperSystems::Mesh),
         (
             log_camera_frames,
@@ -98,6 +100,11 @@ pub fn build_schedule() -> Schedule {
         despawn_consumed_frames.in_set(MapperSystems::Cleanup),
     ));
     schedule
+}
+
+/// Whether category fields follow the registrations while streaming (category mode, online).
+fn online_category_mode(settings: Res<crate::resources::Settings>) -> bool {
+    settings.0.category_fields.enabled && !settings.0.fields.offline
 }
 
 /// The schedule of offline training: fields for objects that lack one, the queued steps, and
@@ -121,13 +128,7 @@ pub fn build_category_schedule() -> Schedule {
     let mut schedule = Schedule::default();
     schedule.set_executor(SingleThreadedExecutor::new());
     schedule.add_systems((
-        (
-            attach_category_fields,
-            ApplyDeferred,
-            train_fields,
-            train_category_fields,
-        )
-            .chain(),
+        (sync_category_fields, ApplyDeferred, train_fields, train_category_fields).chain(),
         log_category_training
             .after(train_category_fields)
             .run_if(resource_exists::<Rerun>),

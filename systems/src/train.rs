@@ -9,6 +9,7 @@ use catmap::rng::{RngStream, seeded_rng};
 use nalgebra::Point3;
 use rayon::prelude::*;
 
+use crate::category_fields::CategoryFields;
 use crate::components::{Background, CameraFrame, FieldLoss, FieldRng, FieldSlot, Keyframes, Object, ObjectBounds};
 use crate::resources::{Fields, Settings, StageTimes, TrainingQueue};
 
@@ -55,15 +56,21 @@ pub fn attach_fields(
     }
 }
 
-/// Online schedule: every frame ingested this tick queues `steps_per_frame` steps.
+/// Online schedule: every frame ingested this tick queues `steps_per_frame` steps of the
+/// object fields and, in category mode, as many of the category fields.
 pub fn queue_online_steps(
     settings: Res<Settings>,
     frames: Query<(), Added<CameraFrame>>,
     mut queue: ResMut<TrainingQueue>,
+    mut category: ResMut<CategoryFields>,
 ) {
     let cfg = &settings.0.fields;
     if cfg.enabled && !cfg.offline {
-        queue.pending += frames.iter().count() as u64 * cfg.steps_per_frame as u64;
+        let steps = frames.iter().count() as u64 * cfg.steps_per_frame as u64;
+        queue.pending += steps;
+        if settings.0.category_fields.enabled {
+            category.pending += steps;
+        }
     }
 }
 

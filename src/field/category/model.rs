@@ -105,6 +105,28 @@ impl CategoryField {
         self.members.len() - 1
     }
 
+    /// Rebuilds the member list: member `j` of the result is the current member `sources[j]`
+    /// (its codes and their optimiser state moved), or a new member with fresh codes drawn from
+    /// `rng` when `None`. The network and its optimiser state are untouched.
+    pub fn remap_members(&mut self, sources: &[Option<usize>], rng: &mut impl Rng) -> Result<()> {
+        if let Some(bad) = sources.iter().flatten().find(|&&j| j >= self.members.len()) {
+            return Err(CatmapError::Degenerate(format!(
+                "member {bad} of {} does not exist",
+                self.members.len()
+            )));
+        }
+        let mut old: Vec<Option<MemberCode>> = std::mem::take(&mut self.members).into_iter().map(Some).collect();
+        for source in sources {
+            match source.and_then(|j| old[j].take()) {
+                Some(member) => self.members.push(member),
+                None => {
+                    self.add_member(rng);
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Hidden width W.
     pub fn hidden(&self) -> usize {
         self.hidden
@@ -315,6 +337,20 @@ impl CategoryField {
 mod tests {
     use super::*;
     use crate::rng::{RngStream, seeded_rng};
+
+    #[test]
+    fn remapping_members_moves_codes_and_keeps_the_network() {
+        let mut rng = seeded_rng(2, RngStream::Mapper);
+        let mut field = CategoryField::new(32, 8, 1.0, 3, &mut rng);
+        let before = field.clone();
+        field.remap_members(&[Some(2), None, Some(0)], &mut rng).expect("valid");
+        assert_eq!(field.num_members(), 3);
+        assert_eq!(field.code(0), before.code(2));
+        assert_eq!(field.code(2), before.code(0));
+        assert_ne!(field.code(1), before.code(1), "a fresh code");
+        assert_eq!(field.params(), before.params());
+        assert!(field.remap_members(&[Some(5)], &mut rng).is_err());
+    }
 
     #[test]
     fn codes_start_with_codenerfs_spread_and_are_seeded() {
