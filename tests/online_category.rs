@@ -1,0 +1,77 @@
+//! Online category mode: while the small scene streams, category fields appear once the chairs
+//! are registered and train beside the per-object fields on every frame; members carry their
+//! slot (field, code, NOCS frame); a membership change keeps every field that survives.
+
+use bevy_ecs::prelude::*;
+use catmap::config::FieldConfig;
+use catmap::dataset::FrameSource;
+use catmap::synth::{Preset, SyntheticScene};
+use catmap::{MapperConfig, ObjectId};
+use catmap_systems::Mapper;
+use catmap_systems::category_fields::{CategoryFields, CategorySlot};
+use catmap_systems::components::Object;
+
+#[test]
+fn category_fields_start_and_train_while_the_scene_streams() {
+    let scene = SyntheticScene::generate(4, Preset::Small).expect("small scene");
+    let mut config = MapperConfig {
+        seed: 3,
+        fields: FieldConfig {
+            steps_per_frame: 4,
+            ..FieldConfig::default()
+        },
+        ..MapperConfig::default()
+    };
+    config.categories.min_field_steps = 20;
+    config.category_fields.enabled = true;
+    let mut mapper = Mapper::new(config).expect("valid config");
+    let mut first_field_at = None;
+    let mut memberships = Vec::new();
+    for position in 0..scene.len() {
+        mapper
+            .push(scene.read_frame(position).expect("frame renders"))
+            .expect("valid frame");
+        mapper.step();
+        let fields = mapper.world().resource::<CategoryFields>();
+        if !fields.members.is_empty() && first_field_at.is_none() {
+            first_field_at = Some((position, fields.steps_done));
+        }
+        if memberships.last() != Some(&fields.members) {
+            memberships.push(fields.members.clone());
+        }
+    }
+    let (position, _) = first_field_at.expect("a category field appears while streaming");
+    assert!(position + 1 < scene.len(), "before the stream ends (frame {position})");
+    let fields = mapper.world().resource::<CategoryFields>();
+    let steps = fields.steps_done;
+    assert!(steps > 0, "category steps ran while streaming");
+    assert!(
+        fields.losses.iter().all(|l| l.is_finite()),
+        "losses {:?}",
+        fields.losses
+    );
+    let members = fields.members.clone();
+    println!("memberships while streaming: {memberships:?}; {steps} category steps");
+    // Every member carries the slot of its place; nobody else has one.
+    let mut slots: Vec<(ObjectId, CategorySlot)> = mapper
+        .world_mut()
+        .query::<(&Object, &CategorySlot)>()
+        .iter(mapper.world())
+        .map(|(o, s)| (o.id, *s))
+        .collect();
+    slots.sort_by_key(|(id, _)| *id);
+    let expected: Vec<(ObjectId, usize, usize)> = {
+        let mut v: Vec<_> = members
+            .iter()
+            .enumerate()
+            .flat_map(|(k, m)| m.iter().enumerate().map(move |(j, id)| (*id, k, j)))
+            .collect();
+        v.sort();
+        v
+    };
+    let got: Vec<(ObjectId, usize, usize)> = slots.iter().map(|(id, s)| (*id, s.field, s.member)).collect();
+    assert_eq!(got, expected);
+    for (_, slot) in &slots {
+        assert!(slot.nocs.world_from_nocs.scaling() > 0.0, "a real NOCS frame");
+    }
+}
