@@ -9,7 +9,7 @@ use catmap::synth::{Preset, SyntheticScene};
 use catmap::{MapperConfig, ObjectId};
 use catmap_systems::Mapper;
 use catmap_systems::category_fields::{CategoryFields, CategorySlot};
-use catmap_systems::components::Object;
+use catmap_systems::components::{FieldMesh, Object};
 
 #[test]
 fn category_fields_start_and_train_while_the_scene_streams() {
@@ -24,6 +24,7 @@ fn category_fields_start_and_train_while_the_scene_streams() {
     };
     config.categories.min_field_steps = 20;
     config.category_fields.enabled = true;
+    config.meshes.preview_every_frames = 5;
     let mut mapper = Mapper::new(config).expect("valid config");
     let mut first_field_at = None;
     let mut memberships = Vec::new();
@@ -73,5 +74,17 @@ fn category_fields_start_and_train_while_the_scene_streams() {
     assert_eq!(got, expected);
     for (_, slot) in &slots {
         assert!(slot.nocs.world_from_nocs.scaling() > 0.0, "a real NOCS frame");
+    }
+    // Live previews of members come from their category field (logged in their subcategory's
+    // colour); everyone else's from its own field.
+    let previews: Vec<(ObjectId, bool, bool)> = mapper
+        .world_mut()
+        .query::<(&Object, &FieldMesh, Option<&CategorySlot>)>()
+        .iter(mapper.world())
+        .map(|(o, m, slot)| (o.id, m.from_category, slot.is_some()))
+        .collect();
+    assert!(previews.len() >= 5, "previews: {previews:?}");
+    for (id, from_category, member) in previews {
+        assert_eq!(from_category, member, "object {id}'s preview source");
     }
 }

@@ -118,6 +118,8 @@ pub struct FieldMesh {
     pub at_step: u64,
     /// Final resolution (`meshes.object`) rather than a preview.
     pub is_final: bool,
+    /// Meshed from the object's category field (category mode) rather than its own field.
+    pub from_category: bool,
 }
 
 /// The object's uncertainty sphere at its class's latest registration.

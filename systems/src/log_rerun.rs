@@ -149,7 +149,11 @@ pub fn log_instance_legend(
         .filter_map(|(object, class)| {
             let id = u16::try_from(object.id.0).ok()?;
             let [r, g, b] = class_color(class.0);
-            Some((id, object_label(object.id, class.0), rerun::Rgba32::from_rgb(r, g, b)))
+            Some((
+                id,
+                object_label(object.id, class.0),
+                rerun::datatypes::Rgba32::from_rgb(r, g, b),
+            ))
         })
         .collect();
     legend.sort_by_key(|(id, _, _)| *id);
@@ -235,16 +239,17 @@ pub fn log_field_losses(
     }
 }
 
-/// Logs each newly extracted field mesh.
+/// Logs each newly extracted field mesh: with the field's colours, or, when it comes from a
+/// category field, in the colour of the object's subcategory (as its aligned box).
 pub fn log_field_meshes(
     rerun: Res<Rerun>,
     progress: Res<StreamProgress>,
-    owners: Query<(Option<&Object>, &FieldMesh), Changed<FieldMesh>>,
+    owners: Query<(Option<&Object>, &FieldMesh, Option<&Membership>), Changed<FieldMesh>>,
 ) {
     if let Some(frame) = progress.last_frame {
         rerun.0.set_time_sequence(paths::TIMELINE, frame.0 as i64);
     }
-    for (object, mesh) in &owners {
+    for (object, mesh, membership) in &owners {
         let path = format!(
             "{}/mesh",
             object.map_or_else(|| paths::BACKGROUND.to_owned(), |o| paths::object(o.id))
@@ -256,8 +261,16 @@ pub fn log_field_meshes(
         }
         let mut archetype = rerun::Mesh3D::new(m.vertices.iter().map(|v| [v.x, v.y, v.z]))
             .with_triangle_indices(m.triangles.iter().map(|t| rerun::TriangleIndices::from(*t)));
-        if let Some(colors) = &m.colors {
-            archetype = archetype.with_vertex_colors(colors.iter().map(|[r, g, b]| rerun::Color::from_rgb(*r, *g, *b)));
+        match (membership.filter(|_| mesh.from_category), &m.colors) {
+            (Some(membership), _) => {
+                let [r, g, b] = SUBCATEGORY_PALETTE[membership.subcategory % SUBCATEGORY_PALETTE.len()];
+                archetype = archetype.with_albedo_factor(rerun::datatypes::Rgba32::from_rgb(r, g, b));
+            }
+            (None, Some(colors)) => {
+                archetype =
+                    archetype.with_vertex_colors(colors.iter().map(|[r, g, b]| rerun::Color::from_rgb(*r, *g, *b)));
+            }
+            (None, None) => {}
         }
         warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
     }

@@ -26,12 +26,15 @@ type Meshable<'w, 's> = Query<
 >;
 
 /// Every `preview_every_frames` ingested frames, meshes each trained object field at the preview
-/// spacing (for live viewing; the background is only meshed at the end).
+/// spacing (for live viewing; the background is only meshed at the end). Members of category
+/// fields (online category mode) are meshed from their category field.
 pub fn extract_preview_meshes(
     settings: Res<Settings>,
     progress: Res<StreamProgress>,
     fields: Res<Fields>,
+    category_fields: Res<CategoryFields>,
     owners: Meshable,
+    members: Query<(Entity, &Object, &CategorySlot)>,
     mut last: Local<Option<FrameIndex>>,
     mut times: ResMut<StageTimes>,
     mut commands: Commands,
@@ -44,13 +47,8 @@ pub fn extract_preview_meshes(
     *last = progress.last_frame;
     let _timer = times.start("meshes");
     let config = settings.0.meshes.preview();
-    for (entity, mesh, at_step) in mesh_fields(&fields, &owners, &config, &config, false) {
-        commands.entity(entity).insert(FieldMesh {
-            mesh,
-            at_step,
-            is_final: false,
-        });
-    }
+    let meshes = mesh_fields(&fields, &owners, &config, &config, false);
+    insert_meshes(meshes, &category_fields, &members, &config, false, &mut commands);
 }
 
 /// Meshes every field at final resolution (`meshes.object`; the background at
@@ -66,15 +64,32 @@ pub fn extract_final_meshes(
 ) {
     let _timer = times.start("meshes");
     let cfg = &settings.0.meshes;
-    let mut meshes = mesh_fields(&fields, &owners, &cfg.object, &cfg.background(), true);
-    // Category members: the mesh of their category field replaces the per-object one.
-    let from_categories = mesh_category_members(&category_fields, &members, &cfg.object);
+    let meshes = mesh_fields(&fields, &owners, &cfg.object, &cfg.background(), true);
+    insert_meshes(meshes, &category_fields, &members, &cfg.object, true, &mut commands);
+}
+
+/// Inserts `meshes` as the owners' [`FieldMesh`]es, the category members' replaced by the mesh
+/// of their category field.
+fn insert_meshes(
+    mut meshes: Vec<(Entity, TriangleMesh, u64)>,
+    category_fields: &CategoryFields,
+    members: &Query<(Entity, &Object, &CategorySlot)>,
+    config: &ObjectMeshConfig,
+    is_final: bool,
+    commands: &mut Commands,
+) {
+    let from_categories = mesh_category_members(category_fields, members, config);
     meshes.retain(|(entity, ..)| !from_categories.iter().any(|(e, ..)| e == entity));
-    for (entity, mesh, at_step) in meshes.into_iter().chain(from_categories) {
+    let tagged = meshes
+        .into_iter()
+        .map(|m| (m, false))
+        .chain(from_categories.into_iter().map(|m| (m, true)));
+    for ((entity, mesh, at_step), from_category) in tagged {
         commands.entity(entity).insert(FieldMesh {
             mesh,
             at_step,
-            is_final: true,
+            is_final,
+            from_category,
         });
     }
 }
