@@ -30,6 +30,7 @@ use catmap::synth::trajectory::look_rotation;
 use catmap::synth::{Preset, Room, SurfaceLabel, SyntheticScene};
 use catmap::{CameraIntrinsics, FrameIndex, MapperConfig, RgbdFrame};
 use catmap_systems::Mapper;
+use catmap_systems::components::{Keyframes, ObjectCloud};
 use catmap_systems::resources::StreamProgress;
 use clap::{Parser, ValueEnum};
 use nalgebra::{Isometry3, Translation3};
@@ -191,7 +192,7 @@ fn run(args: &Args) -> anyhow::Result<()> {
         mapper.set_recording(rerun::RecordingStreamBuilder::new("catmap_long_stream").save(path)?);
     }
     say(&format!("  rss before streaming: {:.1} MiB", rss_mib()));
-    say("  frames  RSS [MiB]  elapsed [s]  read by reader  lead  training steps");
+    say("  frames  RSS [MiB]  elapsed [s]  read by reader  lead  training steps  cloud voxels  keyframes [KiB]");
     let mut samples = Vec::new();
     let mut max_lead = 0;
     let mut next_row = args.rss_every.max(1);
@@ -213,11 +214,13 @@ fn run(args: &Args) -> anyhow::Result<()> {
                 frames: ingested,
                 rss_mib,
             });
+            let (voxels, keyframe_bytes) = map_size(mapper.world_mut());
             say(&format!(
-                "  {ingested:>6}  {rss_mib:>9.1}  {:>11.1}  {:>14}  {lead:>4}  {:>14}",
+                "  {ingested:>6}  {rss_mib:>9.1}  {:>11.1}  {:>14}  {lead:>4}  {:>14}  {voxels:>12}  {:>15.0}",
                 started.elapsed().as_secs_f64(),
                 produced.load(Ordering::SeqCst),
                 mapper.training_steps(),
+                keyframe_bytes as f64 / 1024.0,
             ));
             next_row += args.rss_every.max(1);
         }
@@ -252,6 +255,19 @@ fn run(args: &Args) -> anyhow::Result<()> {
     ));
     anyhow::ensure!(max_lead <= capacity + 1, "the reader ran {max_lead} frames ahead");
     Ok(())
+}
+
+/// What the map holds that may grow with the stream: cloud voxels (objects and background) and
+/// the bytes of every keyframe crop.
+fn map_size(world: &mut bevy_ecs::world::World) -> (usize, usize) {
+    let voxels = world.query::<&ObjectCloud>().iter(world).map(|c| c.0.len()).sum();
+    let keyframe_bytes = world
+        .query::<&Keyframes>()
+        .iter(world)
+        .flat_map(|k| k.0.slots())
+        .map(|slot| slot.data.byte_size())
+        .sum();
+    (voxels, keyframe_bytes)
 }
 
 /// Prints the memory at the end of warm-up and the spread of every later sample.
