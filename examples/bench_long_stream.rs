@@ -32,6 +32,7 @@ use catmap::{CameraIntrinsics, FrameIndex, MapperConfig, RgbdFrame};
 use catmap_systems::Mapper;
 use catmap_systems::components::{Keyframes, ObjectCloud};
 use catmap_systems::resources::StreamProgress;
+use catmap_systems::rrd_file::{RrdFooter, save_rrd};
 use clap::{Parser, ValueEnum};
 use nalgebra::{Isometry3, Translation3};
 
@@ -60,7 +61,8 @@ struct Args {
     /// Scene seed.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Also log to Rerun, saving the recording here (e.g. /dev/null to exercise logging only).
+    /// Also log to Rerun, saving the recording here (e.g. /dev/null to exercise logging only);
+    /// the file gets Rerun's chunk index only if `--frames` ≤ `rerun.rrd_footer_max_frames`.
     #[arg(long)]
     rerun_save: Option<std::path::PathBuf>,
 }
@@ -187,9 +189,15 @@ fn run(args: &Args) -> anyhow::Result<()> {
     ));
     let started = Instant::now();
     let stream = FrameStream::spawn(Arc::new(source), stream_positions(args.frames, 1, None), capacity);
+    let footer = RrdFooter::for_stream(Some(args.frames as u64), &config.rerun);
     let mut mapper = Mapper::with_inbox(config, stream.receiver.clone())?;
     if let Some(path) = &args.rerun_save {
-        mapper.set_recording(rerun::RecordingStreamBuilder::new("catmap_long_stream").save(path)?);
+        let builder = rerun::RecordingStreamBuilder::new("catmap_long_stream");
+        mapper.set_recording(save_rrd(builder, path, footer)?);
+        say(&format!(
+            "  logging to Rerun, saved to {} ({footer:?} chunk index)",
+            path.display()
+        ));
     }
     say(&format!("  rss before streaming: {:.1} MiB", rss_mib()));
     say("  frames  RSS [MiB]  elapsed [s]  read by reader  lead  training steps  cloud voxels  keyframes [KiB]");

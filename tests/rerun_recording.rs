@@ -7,6 +7,7 @@ use catmap::MapperConfig;
 use catmap::dataset::FrameSource;
 use catmap::synth::{Preset, SyntheticScene};
 use catmap_systems::Mapper;
+use catmap_systems::rrd_file::{RrdFooter, save_rrd};
 use re_log_encoding::DecoderApp;
 use re_log_types::LogMsg;
 
@@ -98,5 +99,52 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
     assert!(
         paths.contains("world/background/loss"),
         "the background's loss is logged"
+    );
+}
+
+/// Maps the first ten frames of a small scene (no fields) into a recording saved with `footer`;
+/// returns the file's bytes and entity paths.
+fn record_ten_frames(footer: RrdFooter) -> (Vec<u8>, BTreeSet<String>) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let rrd = dir.path().join("recording.rrd");
+    let scene = SyntheticScene::generate(5, Preset::Small).expect("scene");
+    {
+        let builder = rerun::RecordingStreamBuilder::new("catmap_test");
+        let config = MapperConfig {
+            fields: catmap::config::FieldConfig::disabled(),
+            ..MapperConfig::default()
+        };
+        let mut mapper = Mapper::new(config).expect("config");
+        mapper.set_recording(save_rrd(builder, &rrd, footer).expect("open the recording file"));
+        for position in 0..10 {
+            mapper.push(scene.read_frame(position).expect("frame")).expect("push");
+            mapper.step();
+        }
+        mapper.finish();
+    }
+    let bytes = std::fs::read(&rrd).expect("the recording exists");
+    (bytes, entity_paths(&rrd))
+}
+
+/// Whether an .rrd file ends with Rerun's stream footer (fourcc `RRF2`, identifier `FOOT`).
+fn has_stream_footer(bytes: &[u8]) -> bool {
+    let tail = &bytes[bytes.len().saturating_sub(256)..];
+    tail.windows(8).any(|w| w == b"RRF2FOOT")
+}
+
+#[test]
+fn a_long_stream_recording_without_its_chunk_index_still_holds_every_entity() {
+    // Issue 6 (long stream): Rerun's chunk index grew in memory by ≈ 15 MiB per 1 000 frames.
+    let (indexed, indexed_paths) = record_ten_frames(RrdFooter::Indexed);
+    let (omitted, omitted_paths) = record_ten_frames(RrdFooter::Omitted);
+    assert!(has_stream_footer(&indexed), "a bounded stream keeps the chunk index");
+    assert!(
+        !has_stream_footer(&omitted),
+        "a long stream is saved without the chunk index"
+    );
+    assert_eq!(omitted_paths, indexed_paths, "both files hold the same entities");
+    assert!(
+        omitted_paths.contains("world/camera/image/rgb"),
+        "the footer-less file decodes: {omitted_paths:?}"
     );
 }

@@ -161,6 +161,10 @@ pub struct RerunConfig {
     pub max_points_per_object: usize,
     /// An object's cloud is logged again once it has grown by this fraction (0.25 = 25 %).
     pub cloud_log_growth: f32,
+    /// A saved .rrd ends with Rerun's chunk index (its footer) only for streams of at most this
+    /// many frames: the index is held in memory until the file closes (≈ 15 MiB per 1 000 frames),
+    /// so longer streams are saved without it to keep memory flat (0 = never write it).
+    pub rrd_footer_max_frames: u64,
 }
 
 impl Default for RerunConfig {
@@ -171,6 +175,7 @@ impl Default for RerunConfig {
             jpeg_quality: 80,
             max_points_per_object: 8_000,
             cloud_log_growth: 0.25,
+            rrd_footer_max_frames: 2_000,
         }
     }
 }

@@ -18,6 +18,7 @@ pub mod mapper;
 pub mod meshes;
 pub mod register;
 pub mod resources;
+pub mod rrd_file;
 pub mod schedule;
 pub mod segment;
 pub mod snapshot;
