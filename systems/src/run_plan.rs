@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::Context as _;
+use catmap::config::RerunConfig;
 use catmap::dataset::FrameSource;
 use catmap::dataset::camera_spec::parse_camera_spec;
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
@@ -12,6 +13,7 @@ use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
 use serde::{Deserialize, Serialize};
 
 use crate::cli_run::{DatasetFormat, MapMode};
+use catmap_systems::rrd_file::{RrdFooter, save_rrd};
 
 /// Where the Rerun recording goes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -77,8 +79,10 @@ impl RunPlan {
     }
 
     /// Opens the recording: a connection, or the temporary sibling of the file (see
-    /// [`RunPlan::complete_recording`]).
-    pub fn open_recording(&self) -> anyhow::Result<rerun::RecordingStream> {
+    /// [`RunPlan::complete_recording`]). A file for a stream of more than
+    /// `rerun.rrd_footer_max_frames` frames is saved without Rerun's in-memory chunk index
+    /// ([`crate::rrd_file`]).
+    pub fn open_recording(&self, frames: usize, config: &RerunConfig) -> anyhow::Result<rerun::RecordingStream> {
         let builder = rerun::RecordingStreamBuilder::new("catmap");
         match &self.recording {
             Recording::Connect(url) => builder
@@ -89,8 +93,14 @@ impl RunPlan {
                     std::fs::create_dir_all(parent).with_context(|| format!("cannot create {}", parent.display()))?;
                 }
                 let temp = catmap::atomic_file::temp_path_for(path);
-                builder
-                    .save(&temp)
+                let footer = RrdFooter::for_stream(Some(frames as u64), config);
+                if footer == RrdFooter::Omitted {
+                    tracing::info!(
+                        frames,
+                        "long stream: the recording is saved without its chunk index (add it with `rerun rrd optimize`)"
+                    );
+                }
+                save_rrd(builder, &temp, footer)
                     .with_context(|| format!("cannot write the Rerun recording {}", temp.display()))
             }
         }
