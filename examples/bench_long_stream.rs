@@ -321,23 +321,12 @@ fn slope_per_frame(samples: &[Sample]) -> f64 {
     if sxx > 0.0 { sxy / sxx } else { 0.0 }
 }
 
-fn proc_status_kib(key: &str) -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with(key))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse().ok())
-        })
-        .unwrap_or(f64::NAN)
-}
-
 fn rss_mib() -> f64 {
-    proc_status_kib("VmRSS:") / 1024.0
+    catmap::process_memory::resident_mib().unwrap_or(f64::NAN)
 }
 
 fn peak_rss_mib() -> f64 {
-    proc_status_kib("VmHWM:") / 1024.0
+    catmap::process_memory::peak_resident_mib().unwrap_or(f64::NAN)
 }
 
 #[expect(clippy::print_stdout, reason = "a benchmark prints its figures")]

@@ -33,6 +33,7 @@ pub mod object_view;
 pub mod observed_cloud;
 pub mod oriented_box;
 pub mod pixel_box;
+pub mod process_memory;
 pub mod registration;
 pub mod rng;
 pub mod stream;

@@ -50,6 +50,8 @@ pub struct RunSummary {
     pub total_seconds: f64,
     /// Frames per wall-clock second.
     pub frames_per_second: f64,
+    /// Largest resident memory of the process so far, MiB (Linux; absent elsewhere).
+    pub peak_resident_mib: Option<f64>,
 }
 
 fn class_name(class: catmap::ClassId) -> String {
@@ -86,6 +88,7 @@ impl RunSummary {
             stage_seconds,
             total_seconds,
             frames_per_second: map.frames_ingested as f64 / total_seconds.max(1e-9),
+            peak_resident_mib: catmap::process_memory::peak_resident_mib(),
         }
     }
 
@@ -120,6 +123,9 @@ impl RunSummary {
             "| **wall clock** | {:.2} ({:.1} frames/s) |",
             self.total_seconds, self.frames_per_second
         );
+        if let Some(peak) = self.peak_resident_mib {
+            let _ = writeln!(out, "\npeak memory: {peak:.0} MiB resident");
+        }
         out
     }
 }
