@@ -1,6 +1,8 @@
 //! The one configuration tree. Defaults equal the paper's constants (METHOD.md); a TOML file lists
 //! only what it overrides, and unknown keys are errors.
 
+use std::path::Path;
+
 use serde::{Deserialize, Serialize};
 
 mod category_fields;
@@ -188,6 +190,23 @@ impl MapperConfig {
         Ok(config)
     }
 
+    /// Reads a TOML config file (overrides only). Errors name the file, and the line of a TOML
+    /// syntax or type error (line 0 when a value fails [`MapperConfig::validate`]).
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| CatmapError::io(path, e))?;
+        let parse_error = |line: usize, reason: String| CatmapError::Parse {
+            path: path.to_path_buf(),
+            line,
+            reason,
+        };
+        let config: Self = toml::from_str(&text).map_err(|e| {
+            let line = e.span().map_or(0, |span| line_of(&text, span.start));
+            parse_error(line, e.message().trim().to_owned())
+        })?;
+        config.validate().map_err(|e| parse_error(0, e.to_string()))?;
+        Ok(config)
+    }
+
     /// The configuration as TOML, every field present.
     pub fn to_toml(&self) -> String {
         toml::to_string_pretty(self).expect("the config tree has only TOML-representable fields")
@@ -196,8 +215,10 @@ impl MapperConfig {
     /// Checks values that serde cannot.
     pub fn validate(&self) -> Result<()> {
         let bad = |msg: &str| Err(CatmapError::Config(msg.to_owned()));
-        if self.stream.channel_capacity == 0 {
-            return bad("stream.channel_capacity must be at least 1");
+        if !(1..=MAX_CHANNEL_CAPACITY).contains(&self.stream.channel_capacity) {
+            return Err(CatmapError::Config(format!(
+                "stream.channel_capacity must be between 1 and {MAX_CHANNEL_CAPACITY} frames (the channel reserves a slot per frame)"
+            )));
         }
         if self.stream.frames_per_tick == 0 {
             return bad("stream.frames_per_tick must be at least 1");
@@ -257,6 +278,16 @@ impl MapperConfig {
     }
 }
 
+/// Most frames the reader may run ahead of the mapper: the bounded channel reserves every slot
+/// up front, and more than a few seconds of frames in flight only costs memory.
+pub const MAX_CHANNEL_CAPACITY: usize = 1024;
+
+/// 1-based line of byte `offset` in `text`.
+fn line_of(text: &str, offset: usize) -> usize {
+    let end = offset.min(text.len());
+    1 + text.as_bytes()[..end].iter().filter(|&&b| b == b'\n').count()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -288,8 +319,27 @@ mod tests {
     }
 
     #[test]
+    fn a_config_file_error_names_the_file_and_line() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("bad.toml");
+        std::fs::write(&path, "seed = 1\n[keyframes]\nstrid = 5\n").expect("write");
+        let err = MapperConfig::load(&path).expect_err("unknown key");
+        let text = err.to_string();
+        assert!(text.contains("bad.toml:3:") && text.contains("strid"), "{text}");
+        std::fs::write(&path, "[stream]\nstride = 0\n").expect("write");
+        let err = MapperConfig::load(&path).expect_err("stride 0");
+        assert!(
+            err.to_string().contains("bad.toml:0: invalid config: stream.stride"),
+            "{err}"
+        );
+    }
+
+    #[test]
     fn zero_channel_capacity_is_rejected() {
         let err = MapperConfig::from_toml("[stream]\nchannel_capacity = 0\n").expect_err("must fail");
         assert!(err.to_string().contains("channel_capacity"));
+        // Found by the config fuzzer: the channel reserved 240 GB and the process aborted.
+        let err = MapperConfig::from_toml("[stream]\nchannel_capacity = 4294967295\n").expect_err("must fail");
+        assert!(err.to_string().contains("between 1 and 1024"), "{err}");
     }
 }

@@ -12,6 +12,10 @@ use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion};
 use crate::error::{CatmapError, Result};
 use crate::frame::CameraIntrinsics;
 
+/// Largest camera translation accepted, metres: farther is a corrupt file (and would not survive the
+/// conversion to 32-bit floats).
+const MAX_TRANSLATION_M: f64 = 1.0e6;
+
 /// Largest deviation of the last pose row from `[0, 0, 0, 1]` that is accepted.
 const LAST_ROW_TOLERANCE: f64 = 1e-3;
 /// Largest entry of `RᵀR − I` accepted before orthonormalising.
@@ -182,6 +186,12 @@ pub fn world_from_camera_from_rows(m: &[f64; 16]) -> std::result::Result<Isometr
     if deviation > ORTHONORMAL_TOLERANCE {
         return Err(format!(
             "rotation part is not orthonormal (RᵀR differs from I by {deviation:.4})"
+        ));
+    }
+    if [m[3], m[7], m[11]].iter().any(|v| v.abs() > MAX_TRANSLATION_M) {
+        return Err(format!(
+            "translation [{}, {}, {}] is more than {MAX_TRANSLATION_M} m from the origin",
+            m[3], m[7], m[11]
         ));
     }
     let svd = rotation.svd(true, true);

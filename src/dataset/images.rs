@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use image::{ColorType, ImageDecoder, ImageReader};
 use rayon::prelude::*;
 
+use super::decode_guard::{png_chunk_problem, without_panics};
 use crate::error::{CatmapError, Result};
 
 /// Largest image this module decodes (8192 × 8192): guards allocations against corrupt headers.
@@ -95,6 +96,9 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 
 /// Opens a decoder on `bytes` (format guessed from the content) and checks the size is sane.
 fn decoder_of<'a>(bytes: &'a [u8], path: &Path) -> Result<(impl ImageDecoder + 'a, usize)> {
+    if let Some(problem) = png_chunk_problem(bytes) {
+        return Err(image_error(path, problem));
+    }
     let reader = ImageReader::new(Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| image_error(path, e))?;
@@ -115,6 +119,10 @@ fn decoder_of<'a>(bytes: &'a [u8], path: &Path) -> Result<(impl ImageDecoder + '
 /// Decodes an 8- or 16-bit single-channel image into values of `T` (any type holding a `u16`,
 /// e.g. `f32` for depth that is then converted in place).
 pub fn grey_from_bytes_as<T: From<u16>>(bytes: &[u8], path: &Path) -> Result<Image<T>> {
+    without_panics(|| decode_grey(bytes, path)).map_err(|e| image_error(path, e))?
+}
+
+fn decode_grey<T: From<u16>>(bytes: &[u8], path: &Path) -> Result<Image<T>> {
     let (decoder, n) = decoder_of(bytes, path)?;
     let (width, height) = decoder.dimensions();
     let pixels = match decoder.color_type() {
@@ -151,6 +159,10 @@ pub fn grey16_from_bytes(bytes: &[u8], path: &Path) -> Result<Image<u16>> {
 
 /// Decodes an 8-bit RGB image (PNG or JPEG); RGBA drops alpha, grey is replicated to RGB.
 pub fn rgb_from_bytes(bytes: &[u8], path: &Path) -> Result<Image<[u8; 3]>> {
+    without_panics(|| decode_rgb(bytes, path)).map_err(|e| image_error(path, e))?
+}
+
+fn decode_rgb(bytes: &[u8], path: &Path) -> Result<Image<[u8; 3]>> {
     let (decoder, n) = decoder_of(bytes, path)?;
     let (width, height) = decoder.dimensions();
     let pixels = match decoder.color_type() {

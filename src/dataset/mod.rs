@@ -2,6 +2,7 @@
 //! built-in synthetic scenes, all behind [`FrameSource`].
 
 pub mod camera_spec;
+pub mod decode_guard;
 pub mod images;
 pub mod replica;
 pub mod scannet;

@@ -77,10 +77,7 @@ fn print_stdout(text: &str) {
 fn load_config(path: Option<&PathBuf>) -> anyhow::Result<catmap::MapperConfig> {
     match path {
         None => Ok(catmap::MapperConfig::default()),
-        Some(path) => {
-            let text =
-                std::fs::read_to_string(path).with_context(|| format!("cannot read config {}", path.display()))?;
-            catmap::MapperConfig::from_toml(&text).with_context(|| format!("in config {}", path.display()))
-        }
+        // The error names the file (and the line of a TOML error).
+        Some(path) => catmap::MapperConfig::load(path).context("cannot load the config"),
     }
 }

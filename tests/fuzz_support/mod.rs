@@ -1,0 +1,160 @@
+//! A small seeded mutation fuzzer for the reader paths (no nightly toolchain, so no cargo-fuzz).
+//!
+//! Each target draws inputs from its own ChaCha stream (seed `CATMAP_FUZZ_SEED`, default 0, mixed
+//! with the target's name), so a run is reproducible: the n-th input of a seed is always the same.
+//! A target runs for `CATMAP_FUZZ_SECONDS` seconds (default [`DEFAULT_SECONDS`]); each input is
+//! executed under `catch_unwind`, and a panic or a broken property (an error that does not name
+//! the file, a decoded frame that fails validation) is a failure. Failing inputs are saved under
+//! `$CARGO_TARGET_TMPDIR/fuzz-failures/<target>/` with the seed and iteration in the name.
+#![allow(dead_code, reason = "each test crate uses a different subset")]
+
+pub mod fixtures;
+pub mod mutate;
+pub mod png;
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+/// Seconds per target in a plain `cargo test`.
+pub const DEFAULT_SECONDS: f64 = 3.0;
+/// A run stops early after this many failures.
+const MAX_FAILURES: usize = 5;
+
+/// What one execution did with its input.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    /// The reader accepted the input (and its output passed the target's checks).
+    Accepted,
+    /// The reader rejected the input with an error that passed the target's checks.
+    Rejected,
+}
+
+/// Result of one execution: a verdict, or the property that broke.
+pub type Execution = Result<Verdict, String>;
+
+/// Totals of one target's run.
+#[derive(Debug, Clone, Default)]
+pub struct Report {
+    /// Inputs executed.
+    pub executions: u64,
+    /// Inputs accepted.
+    pub accepted: u64,
+    /// Inputs rejected with a proper error.
+    pub rejected: u64,
+    /// Panics and broken properties, with the file the input was saved to.
+    pub failures: Vec<String>,
+    /// Wall-clock time.
+    pub elapsed: Duration,
+}
+
+/// Time budget per target: `CATMAP_FUZZ_SECONDS`, else [`DEFAULT_SECONDS`].
+pub fn budget() -> Duration {
+    let seconds = std::env::var("CATMAP_FUZZ_SECONDS")
+        .ok()
+        .and_then(|s| s.trim().parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s >= 0.0)
+        .unwrap_or(DEFAULT_SECONDS);
+    Duration::from_secs_f64(seconds)
+}
+
+/// Base seed: `CATMAP_FUZZ_SEED`, else 0.
+pub fn base_seed() -> u64 {
+    std::env::var("CATMAP_FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap_or(0)
+}
+
+/// The generator of target `name` (FNV-1a of the name mixed into the base seed).
+pub fn target_rng(name: &str) -> ChaCha8Rng {
+    let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    ChaCha8Rng::seed_from_u64(base_seed() ^ hash)
+}
+
+fn failure_dir(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("fuzz-failures")
+        .join(name)
+}
+
+fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| (*s).to_owned())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "non-string panic payload".to_owned())
+}
+
+/// Runs target `name` for [`budget`]: `generate` draws an input, `execute` runs the reader on it.
+/// `save` renders an input as bytes (plus a description) for the failure file. Panics when any
+/// input panicked or broke a property, listing them all.
+pub fn fuzz<I>(
+    name: &str,
+    mut generate: impl FnMut(&mut ChaCha8Rng) -> I,
+    mut execute: impl FnMut(&I) -> Execution,
+    save: impl Fn(&I) -> (String, Vec<u8>),
+) -> Report {
+    let budget = budget();
+    let mut rng = target_rng(name);
+    let started = Instant::now();
+    let mut report = Report::default();
+    while (report.executions == 0 || started.elapsed() < budget) && report.failures.len() < MAX_FAILURES {
+        let iteration = report.executions;
+        let input = generate(&mut rng);
+        report.executions += 1;
+        let problem = match catch_unwind(AssertUnwindSafe(|| execute(&input))) {
+            Ok(Ok(Verdict::Accepted)) => {
+                report.accepted += 1;
+                continue;
+            }
+            Ok(Ok(Verdict::Rejected)) => {
+                report.rejected += 1;
+                continue;
+            }
+            Ok(Err(broken)) => broken,
+            Err(payload) => format!("panic: {}", panic_text(payload.as_ref())),
+        };
+        let (description, bytes) = save(&input);
+        let dir = failure_dir(name);
+        let file = dir.join(format!("seed{}-iteration{iteration}.bin", base_seed()));
+        let saved = std::fs::create_dir_all(&dir).and_then(|()| std::fs::write(&file, &bytes));
+        let place = saved.map_or_else(|e| format!("not saved: {e}"), |()| file.display().to_string());
+        report.failures.push(format!(
+            "iteration {iteration} ({description}): {problem} [input: {place}]"
+        ));
+    }
+    report.elapsed = started.elapsed();
+    eprintln!(
+        "fuzz {name}: {} executions in {:.1} s ({:.0}/s), {} accepted, {} rejected, {} failures (seed {})",
+        report.executions,
+        report.elapsed.as_secs_f64(),
+        report.executions as f64 / report.elapsed.as_secs_f64().max(1e-9),
+        report.accepted,
+        report.rejected,
+        report.failures.len(),
+        base_seed()
+    );
+    assert!(
+        report.failures.is_empty(),
+        "fuzz target {name} found {} failures:\n{}",
+        report.failures.len(),
+        report.failures.join("\n")
+    );
+    report
+}
+
+/// `Ok(Rejected)` when `error` mentions `needle` (a file name or folder), else the broken property.
+pub fn rejected_naming(error: &impl std::fmt::Display, needle: &str) -> Execution {
+    let text = error.to_string();
+    if text.contains(needle) {
+        Ok(Verdict::Rejected)
+    } else {
+        Err(format!("error does not name {needle:?}: {text}"))
+    }
+}
