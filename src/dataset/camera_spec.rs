@@ -42,6 +42,14 @@ pub fn intrinsics_problem(intrinsics: &CameraIntrinsics) -> Option<String> {
     if !(cx.is_finite() && cy.is_finite()) {
         return Some(format!("principal point ({cx}, {cy}) must be finite"));
     }
+    // Lenient (crops and shifted lenses move it off-centre, even off the image); farther than an
+    // image size beyond the border is a corrupt file.
+    let (w, h) = (f64::from(width), f64::from(height));
+    if (f64::from(cx) - w / 2.0).abs() > 1.5 * w || (f64::from(cy) - h / 2.0).abs() > 1.5 * h {
+        return Some(format!(
+            "principal point ({cx}, {cy}) lies far outside the {width}×{height} image"
+        ));
+    }
     None
 }
 
@@ -190,7 +198,7 @@ pub fn world_from_camera_from_rows(m: &[f64; 16]) -> std::result::Result<Isometr
     }
     if [m[3], m[7], m[11]].iter().any(|v| v.abs() > MAX_TRANSLATION_M) {
         return Err(format!(
-            "translation [{}, {}, {}] is more than {MAX_TRANSLATION_M} m from the origin",
+            "translation [{:.3e}, {:.3e}, {:.3e}] is more than {MAX_TRANSLATION_M} m from the origin",
             m[3], m[7], m[11]
         ));
     }
@@ -273,5 +281,31 @@ mod tests {
                 .expect_err("last row")
                 .contains("last row")
         );
+    }
+
+    #[test]
+    fn translations_beyond_f32_and_far_principal_points_are_rejected() {
+        // Found by the pose fuzzers: 1e39 is finite as f64 but became inf as f32.
+        let far = [
+            1.0, 0.0, 0.0, 1e39, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ];
+        let err = world_from_camera_from_rows(&far).expect_err("too far");
+        assert!(err.contains("1.000e39") && err.contains("from the origin"), "{err}");
+        let camera = |cx, cy| CameraIntrinsics {
+            width: 16,
+            height: 12,
+            fx: 12.0,
+            fy: 12.0,
+            cx,
+            cy,
+        };
+        assert_eq!(intrinsics_problem(&camera(7.5, 5.5)), None);
+        assert_eq!(
+            intrinsics_problem(&camera(20.0, -3.0)),
+            None,
+            "off the image but plausible"
+        );
+        let problem = intrinsics_problem(&camera(70.5, 5.5)).expect("far outside");
+        assert!(problem.contains("far outside the 16×12 image"), "{problem}");
     }
 }
