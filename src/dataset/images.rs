@@ -219,7 +219,18 @@ pub fn read_rgb(path: &Path) -> Result<Image<[u8; 3]>> {
 pub fn read_size(path: &Path) -> Result<(u32, u32)> {
     let reader = ImageReader::open(path).map_err(|e| CatmapError::io(path, e))?;
     let reader = reader.with_guessed_format().map_err(|e| image_error(path, e))?;
-    reader.into_dimensions().map_err(|e| image_error(path, e))
+    let (width, height) = reader.into_dimensions().map_err(|e| image_error(path, e))?;
+    let pixels = u64::from(width) * u64::from(height);
+    if pixels == 0 || pixels > MAX_PIXELS {
+        // Found by the ScanNet folder fuzzer: a header claiming 32×4 278 190 108 pixels made the
+        // reader allocate 100 GB for the cropped camera and abort.
+        let reason = format!(
+            "is {} pixels, expected 1 to {MAX_PIXELS} pixels",
+            size_text((width, height))
+        );
+        return Err(image_error(path, reason));
+    }
+    Ok((width, height))
 }
 
 /// Fails unless `image` is `expected` in size; `what` completes "… but {what} is W×H".

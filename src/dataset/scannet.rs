@@ -28,7 +28,9 @@ use nalgebra::Isometry3;
 
 use crate::classes::SCANNET_BACKGROUND;
 use crate::dataset::FrameSource;
-use crate::dataset::camera_spec::{parse_numbers, read_intrinsic_matrix, world_from_camera_from_rows};
+use crate::dataset::camera_spec::{
+    intrinsics_problem, parse_numbers, read_intrinsic_matrix, world_from_camera_from_rows,
+};
 use crate::dataset::images::{
     Image, check_depth_options, depth_to_metres_in_place, numbered_files, read_grey_as, read_rgb, read_size,
     require_size, resize_bilinear_rgb, resize_nearest, size_text,
@@ -185,12 +187,23 @@ impl ScanNetSequence {
                 reason,
             });
         };
-        let full = read_intrinsic_matrix(&dir.join("intrinsic").join("intrinsic_depth.txt"), width, height)?;
+        // The matrix is the full depth image's; the cropped camera is checked again.
+        let matrix_path = dir.join("intrinsic").join("intrinsic_depth.txt");
+        let full = read_intrinsic_matrix(&matrix_path, depth_size.0, depth_size.1)?;
         let intrinsics = CameraIntrinsics {
+            width,
+            height,
             cx: full.cx - border as f32,
             cy: full.cy - border as f32,
             ..full
         };
+        if let Some(problem) = intrinsics_problem(&intrinsics) {
+            return Err(CatmapError::Parse {
+                path: matrix_path,
+                line: 0,
+                reason: format!("after cropping the {border}-pixel border: {problem}"),
+            });
+        }
         tracing::debug!(dir = %dir.display(), frames = frames.len(), ?intrinsics, "opened ScanNet sequence");
         Ok(Self {
             dir,

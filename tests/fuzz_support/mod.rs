@@ -5,7 +5,9 @@
 //! A target runs for `CATMAP_FUZZ_SECONDS` seconds (default [`DEFAULT_SECONDS`]); each input is
 //! executed under `catch_unwind`, and a panic or a broken property (an error that does not name
 //! the file, a decoded frame that fails validation) is a failure. Failing inputs are saved under
-//! `$CARGO_TARGET_TMPDIR/fuzz-failures/<target>/` with the seed and iteration in the name.
+//! `$CARGO_TARGET_TMPDIR/fuzz-failures/<target>/` with the seed and iteration in the name; with
+//! `CATMAP_FUZZ_TRACE` set, every input is first written to `in-flight.bin` there (to catch
+//! inputs that abort the process, e.g. on a failed allocation).
 #![allow(dead_code, reason = "each test crate uses a different subset")]
 
 pub mod fixtures;
@@ -101,6 +103,7 @@ pub fn fuzz<I>(
     save: impl Fn(&I) -> (String, Vec<u8>),
 ) -> Report {
     let budget = budget();
+    let trace = std::env::var_os("CATMAP_FUZZ_TRACE").is_some();
     let mut rng = target_rng(name);
     let started = Instant::now();
     let mut report = Report::default();
@@ -108,6 +111,12 @@ pub fn fuzz<I>(
         let iteration = report.executions;
         let input = generate(&mut rng);
         report.executions += 1;
+        if trace {
+            // An allocation failure aborts the process before a failure could be saved.
+            let dir = failure_dir(name);
+            let _ = std::fs::create_dir_all(&dir);
+            let _ = std::fs::write(dir.join("in-flight.bin"), save(&input).1);
+        }
         let problem = match catch_unwind(AssertUnwindSafe(|| execute(&input))) {
             Ok(Ok(Verdict::Accepted)) => {
                 report.accepted += 1;
