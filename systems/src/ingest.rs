@@ -1,7 +1,7 @@
 //! Ingest stage: frames leave the stream and become `CameraFrame` entities.
 
 use bevy_ecs::prelude::*;
-use catmap::stream::StreamMessage;
+use catmap::stream::{StreamMessage, StreamStats};
 
 use crate::components::CameraFrame;
 use crate::resources::{FrameInbox, Settings, StageTimes, StreamProgress};
@@ -37,5 +37,17 @@ pub fn ingest_frames(
                 break;
             }
         }
+    }
+    if progress.ended.is_none() && inbox.0.is_empty() && inbox.0.try_recv().is_err_and(|e| e.is_disconnected()) {
+        // The reader is gone without its end message (it died): keep what was mapped.
+        tracing::warn!(
+            frames = progress.frames_ingested,
+            "the stream stopped without its end; finishing"
+        );
+        progress.ended = Some(StreamStats {
+            frames_sent: progress.frames_ingested,
+            frames_skipped: progress.frames_skipped,
+            ..StreamStats::default()
+        });
     }
 }

@@ -320,7 +320,9 @@ impl Mapper {
     /// Meshes every field at final resolution (logged to Rerun when recording) and returns them.
     pub fn extract_final_meshes(&mut self) -> MapMeshes {
         self.final_meshes.run(&mut self.world);
-        collect_meshes(&mut self.world)
+        let meshes = collect_meshes(&mut self.world);
+        crate::meshes::warn_missing_meshes(&mut self.world, &meshes);
+        meshes
     }
 
     /// Every class's subcategories as registered so far (see `categories.json`).

@@ -1,9 +1,9 @@
 //! Mesh stage: field meshes as previews every few frames, and at final resolution at the end.
 
 use bevy_ecs::prelude::*;
-use catmap::FrameIndex;
 use catmap::mesh::{Aabb, TriangleMesh};
 use catmap::meshing::{MapMeshes, ObjectFrame, ObjectMeshConfig, mesh_category_member, mesh_occupancy_field};
+use catmap::{FrameIndex, ObjectId};
 use rayon::prelude::*;
 
 use crate::category_fields::{CategoryFields, CategorySlot};
@@ -164,4 +164,19 @@ pub fn collect_meshes(world: &mut World) -> MapMeshes {
         }
     }
     meshes
+}
+
+/// Warns about a map without objects and about every object left without a final mesh (too
+/// little data to fit a box or train its field); returns the ids of the latter, sorted.
+pub fn warn_missing_meshes(world: &mut World, meshes: &MapMeshes) -> Vec<ObjectId> {
+    let mut ids: Vec<ObjectId> = world.query::<&Object>().iter(world).map(|o| o.id).collect();
+    ids.sort();
+    if ids.is_empty() {
+        tracing::warn!("the map has no objects: only the background is meshed");
+    }
+    let missing: Vec<ObjectId> = ids.into_iter().filter(|id| !meshes.objects.contains_key(id)).collect();
+    for id in &missing {
+        tracing::warn!(object = %id, "no mesh: too little data for this object");
+    }
+    missing
 }
