@@ -147,16 +147,14 @@ fn an_object_with_a_handful_of_pixels_gets_no_mesh_and_the_rest_map() {
     assert!(!meshes.objects.contains_key(&tiny), "5 pixels cannot make a mesh");
     assert!(!meshes.objects.is_empty(), "the other objects still get meshes");
     let map = mapper.finish();
-    println!(
-        "tiny object: {:?}; warnings: {warnings}",
-        map.object(tiny).map(|o| o.cloud_points)
+    assert!(
+        map.object(tiny).is_none(),
+        "too small to become an object (box below min_box_side_px)"
     );
-    if map.object(tiny).is_some() {
-        assert!(
-            warnings.contains(&format!("object={tiny}")),
-            "the skip is logged: {warnings}"
-        );
-    }
+    assert!(
+        !warnings.contains(&format!("object={tiny}")),
+        "nothing to warn about: {warnings}"
+    );
 }
 
 #[test]
@@ -252,7 +250,7 @@ fn a_class_with_one_object_keeps_its_instance_field() {
 }
 
 #[test]
-fn identical_objects_share_one_subcategory_and_all_get_meshes() {
+fn identical_objects_are_one_class_and_all_get_meshes() {
     let scene = SyntheticScene::generate(4, Preset::Small).expect("small scene");
     let design = scene.objects()[0].design;
     let same: Vec<ObjectId> = scene

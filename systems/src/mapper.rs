@@ -187,8 +187,11 @@ impl Mapper {
                 // Wait for the reader instead of spinning; the timeout keeps the loop responsive.
                 let mut select = crossbeam_channel::Select::new();
                 select.recv(&inbox);
-                let _ = select.ready_timeout(Duration::from_millis(100));
-                continue;
+                let ready = select.ready_timeout(Duration::from_millis(100)).is_ok();
+                if !ready || !inbox.is_empty() {
+                    continue;
+                }
+                // Ready yet empty: the reader hung up without its end; a step lets ingest end the stream.
             }
             self.step();
             if on_step(self.world.resource::<StreamProgress>().frames_ingested).is_break() {

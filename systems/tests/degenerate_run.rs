@@ -116,7 +116,6 @@ fn catmap_run_on_a_stream_truncated_mid_frame_reports_it_and_keeps_the_map() {
     assert!(stderr.contains("depth_3.png"), "the truncated file is named: {stderr}");
     let out = work.join("out");
     let summary = json(&out.join("summary.json"));
-    println!("{summary}");
     assert_eq!(summary["frames_skipped"], 1, "one frame skipped");
     assert!(!object_meshes(&out).is_empty(), "the other frames are meshed");
     assert!(json(&out.join("categories.json")).is_array(), "categories written");
