@@ -152,8 +152,8 @@ fn an_object_with_a_handful_of_pixels_gets_no_mesh_and_the_rest_map() {
         "too small to become an object (box below min_box_side_px)"
     );
     assert!(
-        !warnings.contains(&format!("object={tiny}")),
-        "nothing to warn about: {warnings}"
+        warnings.contains(&format!("object={tiny}")) && warnings.contains("never mapped"),
+        "the ignored instance is named: {warnings}"
     );
 }
 

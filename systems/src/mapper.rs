@@ -19,7 +19,8 @@ use crate::components::{Background, Keyframes, ObjectCloud, ObjectRng, VisibleFr
 use crate::log_rerun::{Rerun, log_world_setup};
 use crate::meshes::collect_meshes;
 use crate::resources::{
-    CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, StageTimes, StreamProgress, TrainingQueue,
+    CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, SmallInstances, StageTimes,
+    StreamProgress, TrainingQueue,
 };
 use crate::schedule::{build_category_schedule, build_final_mesh_schedule, build_schedule, build_training_schedule};
 use crate::snapshot::MapSnapshot;
@@ -89,6 +90,7 @@ impl Mapper {
         world.init_resource::<ObjectIndex>();
         world.init_resource::<CategoryIndex>();
         world.init_resource::<StageTimes>();
+        world.init_resource::<SmallInstances>();
         world.init_resource::<PhaseProgress>();
         Ok(Self {
             world,

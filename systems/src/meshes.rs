@@ -174,6 +174,16 @@ pub fn warn_missing_meshes(world: &mut World, meshes: &MapMeshes) -> Vec<ObjectI
     if ids.is_empty() {
         tracing::warn!("the map has no objects: only the background is meshed");
     }
+    let min_side = world.resource::<crate::resources::Settings>().0.objects.min_box_side_px;
+    for (id, frames) in &world.resource::<crate::resources::SmallInstances>().0 {
+        if ids.binary_search(id).is_err() {
+            tracing::warn!(
+                object = %id,
+                frames,
+                "never mapped: its 2D box was at most objects.min_box_side_px = {min_side} px in every frame"
+            );
+        }
+    }
     let missing: Vec<ObjectId> = ids.into_iter().filter(|id| !meshes.objects.contains_key(id)).collect();
     for id in &missing {
         tracing::warn!(object = %id, "no mesh: too little data for this object");

@@ -37,6 +37,11 @@ pub struct ObjectIndex(pub BTreeMap<ObjectId, Entity>);
 #[derive(Resource, Debug, Clone, Default)]
 pub struct CategoryIndex(pub BTreeMap<ClassId, Entity>);
 
+/// Instances seen with a 2D box at most `objects.min_box_side_px` wide or high, with the number of
+/// frames each was ignored in (those never seen bigger are named in a warning at the end).
+#[derive(Resource, Debug, Clone, Default)]
+pub struct SmallInstances(pub BTreeMap<ObjectId, u32>);
+
 /// Wall-clock time spent per stage.
 #[derive(Resource, Debug, Clone, Default)]
 pub struct StageTimes(pub BTreeMap<String, Duration>);
