@@ -60,6 +60,10 @@ fn pick<'a, T>(items: &'a [T], rng: &mut ChaCha8Rng) -> &'a T {
     &items[rng.random_range(0..items.len())]
 }
 
+#[expect(
+    clippy::ptr_arg,
+    reason = "the fuzz harness saves inputs of type &I, here I = Vec<u8>"
+)]
 fn save_bytes(bytes: &Vec<u8>) -> (String, Vec<u8>) {
     (format!("{} bytes", bytes.len()), bytes.clone())
 }
@@ -180,10 +184,10 @@ fn random_pose_line(rng: &mut ChaCha8Rng) -> String {
 fn parse_pose_lines(text: &str) -> Result<(), String> {
     for line in text.lines() {
         let Ok(numbers) = parse_numbers(line) else { continue };
-        if let Ok(rows) = <[f64; 16]>::try_from(numbers) {
-            if let Ok(pose) = world_from_camera_from_rows(&rows) {
-                check_pose(&pose)?;
-            }
+        if let Ok(rows) = <[f64; 16]>::try_from(numbers)
+            && let Ok(pose) = world_from_camera_from_rows(&rows)
+        {
+            check_pose(&pose)?;
         }
     }
     Ok(())

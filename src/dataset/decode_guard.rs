@@ -16,7 +16,7 @@ pub fn png_chunk_problem(bytes: &[u8]) -> Option<String> {
     while rest.len() >= 8 {
         let length = u32::from_be_bytes([rest[0], rest[1], rest[2], rest[3]]) as usize;
         let kind = &rest[4..8];
-        if kind == b"PLTE" && (length == 0 || length % 3 != 0 || length > 3 * 256) {
+        if kind == b"PLTE" && (length == 0 || !length.is_multiple_of(3) || length > 3 * 256) {
             return Some(format!(
                 "PNG palette (PLTE) of {length} bytes, expected 3 to 768 bytes in RGB triples"
             ));
