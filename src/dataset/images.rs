@@ -103,7 +103,13 @@ fn decoder_of<'a>(bytes: &'a [u8], path: &Path) -> Result<(impl ImageDecoder + '
         .with_guessed_format()
         .map_err(|e| image_error(path, e))?;
     let decoder = reader.into_decoder().map_err(|e| image_error(path, e))?;
-    let (width, height) = decoder.dimensions();
+    let pixel_count = checked_pixel_count(decoder.dimensions(), path)?;
+    Ok((decoder, pixel_count))
+}
+
+/// The pixel count of an image of `size`, refused when zero or above [`MAX_PIXELS`] (before
+/// anything of that size is allocated).
+fn checked_pixel_count((width, height): (u32, u32), path: &Path) -> Result<usize> {
     let pixel_count = u64::from(width) * u64::from(height);
     if pixel_count == 0 || pixel_count > MAX_PIXELS {
         let reason = format!(
@@ -112,8 +118,7 @@ fn decoder_of<'a>(bytes: &'a [u8], path: &Path) -> Result<(impl ImageDecoder + '
         );
         return Err(image_error(path, reason));
     }
-    let pixel_count = usize::try_from(pixel_count).map_err(|e| image_error(path, e))?;
-    Ok((decoder, pixel_count))
+    usize::try_from(pixel_count).map_err(|e| image_error(path, e))
 }
 
 /// Decodes an 8- or 16-bit single-channel image into values of `T` (any type holding a `u16`,
@@ -219,18 +224,11 @@ pub fn read_rgb(path: &Path) -> Result<Image<[u8; 3]>> {
 pub fn read_size(path: &Path) -> Result<(u32, u32)> {
     let reader = ImageReader::open(path).map_err(|e| CatmapError::io(path, e))?;
     let reader = reader.with_guessed_format().map_err(|e| image_error(path, e))?;
-    let (width, height) = reader.into_dimensions().map_err(|e| image_error(path, e))?;
-    let pixels = u64::from(width) * u64::from(height);
-    if pixels == 0 || pixels > MAX_PIXELS {
-        // Found by the ScanNet folder fuzzer: a header claiming 32×4 278 190 108 pixels made the
-        // reader allocate 100 GB for the cropped camera and abort.
-        let reason = format!(
-            "is {} pixels, expected 1 to {MAX_PIXELS} pixels",
-            size_text((width, height))
-        );
-        return Err(image_error(path, reason));
-    }
-    Ok((width, height))
+    let size = reader.into_dimensions().map_err(|e| image_error(path, e))?;
+    // Found by the ScanNet folder fuzzer: a header claiming 32×4 278 190 108 pixels made the
+    // reader allocate 100 GB for the cropped camera and abort.
+    checked_pixel_count(size, path)?;
+    Ok(size)
 }
 
 /// Fails unless `image` is `expected` in size; `what` completes "… but {what} is W×H".
