@@ -17,6 +17,7 @@ use std::time::Instant;
 
 use catmap::dataset::FrameSource;
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
+use catmap::process_memory::{peak_resident_mib, resident_mib};
 use catmap::stream::{FrameStream, stream_positions};
 use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
 use catmap::{CameraIntrinsics, MapperConfig, RgbdFrame};
@@ -140,7 +141,7 @@ fn main() -> anyhow::Result<()> {
     let mut samples = Vec::new();
     mapper.run_to_end(|n| {
         if n >= next_report {
-            let rss = rss_mib();
+            let rss = resident_mib().unwrap_or(f64::NAN);
             samples.push((n, rss));
             say(&format!("  {n:>6}   {rss:>8.1}"));
             next_report += args.rss_every;
@@ -156,7 +157,7 @@ fn main() -> anyhow::Result<()> {
     say(&format!(
         "  {:.1} frames/s; peak RSS {:.1} MiB",
         args.long_frames as f64 / seconds,
-        peak_rss_mib()
+        peak_resident_mib().unwrap_or(f64::NAN)
     ));
     say(&format!(
         "  after warm-up (last 80 % of samples): RSS {lo:.1}–{hi:.1} MiB, spread {:.1} %",
@@ -168,14 +169,6 @@ fn main() -> anyhow::Result<()> {
         seconds
     ));
     Ok(())
-}
-
-fn rss_mib() -> f64 {
-    catmap::process_memory::resident_mib().unwrap_or(f64::NAN)
-}
-
-fn peak_rss_mib() -> f64 {
-    catmap::process_memory::peak_resident_mib().unwrap_or(f64::NAN)
 }
 
 #[expect(clippy::print_stdout, reason = "a benchmark prints its figures")]

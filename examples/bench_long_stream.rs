@@ -23,6 +23,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use catmap::dataset::FrameSource;
+use catmap::process_memory::{peak_resident_mib, resident_mib};
 use catmap::stream::{FrameStream, stream_positions};
 use catmap::synth::geometry::SceneGeometry;
 use catmap::synth::render::render_view;
@@ -199,7 +200,10 @@ fn run(args: &Args) -> anyhow::Result<()> {
             path.display()
         ));
     }
-    say(&format!("  rss before streaming: {:.1} MiB", rss_mib()));
+    say(&format!(
+        "  rss before streaming: {:.1} MiB",
+        resident_mib().unwrap_or(f64::NAN)
+    ));
     say("  frames  RSS [MiB]  elapsed [s]  read by reader  lead  training steps  cloud voxels  keyframes [KiB]");
     let mut samples = Vec::new();
     let mut max_lead = 0;
@@ -217,7 +221,7 @@ fn run(args: &Args) -> anyhow::Result<()> {
         let lead = produced.load(Ordering::SeqCst).saturating_sub(ingested as usize);
         max_lead = max_lead.max(lead);
         if ingested >= next_row {
-            let rss_mib = rss_mib();
+            let rss_mib = resident_mib().unwrap_or(f64::NAN);
             samples.push(Sample {
                 frames: ingested,
                 rss_mib,
@@ -243,7 +247,7 @@ fn run(args: &Args) -> anyhow::Result<()> {
         stats.frames_sent,
         stats.frames_sent as f64 / seconds,
         map.objects.len(),
-        peak_rss_mib()
+        peak_resident_mib().unwrap_or(f64::NAN)
     ));
     let stage_list: Vec<String> = stages.iter().map(|(k, v)| format!("{k} {v:.1}")).collect();
     say(&format!("  seconds per stage: {}", stage_list.join(", ")));
@@ -319,14 +323,6 @@ fn slope_per_frame(samples: &[Sample]) -> f64 {
         (sxy + dx * (s.rss_mib - my), sxx + dx * dx)
     });
     if sxx > 0.0 { sxy / sxx } else { 0.0 }
-}
-
-fn rss_mib() -> f64 {
-    catmap::process_memory::resident_mib().unwrap_or(f64::NAN)
-}
-
-fn peak_rss_mib() -> f64 {
-    catmap::process_memory::peak_resident_mib().unwrap_or(f64::NAN)
 }
 
 #[expect(clippy::print_stdout, reason = "a benchmark prints its figures")]

@@ -1,6 +1,6 @@
-//! Fuzzing of every reader path (issue 6, Resilience): PNG decoding, Replica trajectories, ScanNet
-//! poses, intrinsics (intrinsics.json, `--camera`, ScanNet's intrinsic matrix), config TOML, and
-//! the Replica and ScanNet folder readers over fixture folders with one mutated file.
+//! Fuzzing of the reader paths (issue 6, Resilience): PNG decoding, Replica trajectories, ScanNet
+//! poses, intrinsics (intrinsics.json, `--camera`, ScanNet's intrinsic matrix) and config TOML;
+//! the folder readers are fuzzed in `fuzz_folders.rs`.
 //!
 //! Each target runs for `CATMAP_FUZZ_SECONDS` seconds (default 3) from seed `CATMAP_FUZZ_SEED`
 //! (default 0) and fails on any panic, any error that does not name its file, and any decoded
@@ -14,51 +14,25 @@ mod fuzz_support;
 
 use std::path::Path;
 
+use catmap::MapperConfig;
 use catmap::dataset::FrameSource;
 use catmap::dataset::camera_spec::{
     intrinsics_problem, parse_camera_spec, parse_numbers, read_intrinsic_matrix, read_intrinsics_json,
     world_from_camera_from_rows,
 };
-use catmap::dataset::images::{
-    Image, grey_from_bytes, grey_from_bytes_as, grey16_from_bytes, resize_bilinear_rgb, resize_nearest, rgb_from_bytes,
-};
+use catmap::dataset::images::{Image, grey_from_bytes, grey_from_bytes_as, grey16_from_bytes, rgb_from_bytes};
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
+use catmap::dataset::resize::{resize_bilinear_rgb, resize_nearest};
 use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
-use catmap::{MapperConfig, RgbdFrame};
-use fuzz_support::fixtures::{FileSet, Folder, FolderEdit, replica_files, rgb_image, scannet_files};
+use fuzz_support::checks::check_pose;
+use fuzz_support::fixtures::{Folder, replica_files, rgb_image, scannet_files};
 use fuzz_support::mutate::{mutate_bytes, mutate_text, random_text};
 use fuzz_support::png::{generate_png, mutate_png};
-use fuzz_support::{Execution, Verdict, fuzz, rejected_naming};
+use fuzz_support::{Execution, Verdict, fuzz, pick, rejected_naming};
 use image::ImageFormat;
-use nalgebra::{Isometry3, Rotation3, Vector3};
+use nalgebra::{Rotation3, Vector3};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
-
-/// A decoded frame must be consistent (sizes, finite pose) and hold no NaN or negative depth.
-fn check_frame(frame: &RgbdFrame) -> Result<(), String> {
-    frame.validate()?;
-    if let Some(problem) = intrinsics_problem(&frame.intrinsics) {
-        return Err(format!("decoded frame has bad intrinsics: {problem}"));
-    }
-    match frame.depth_m.iter().find(|d| !(d.is_finite() && **d >= 0.0)) {
-        Some(d) => Err(format!("decoded frame has depth {d}")),
-        None => Ok(()),
-    }
-}
-
-/// A pose must be finite with a unit rotation.
-fn check_pose(pose: &Isometry3<f32>) -> Result<(), String> {
-    let finite = pose.to_homogeneous().iter().all(|x| x.is_finite());
-    if finite && (pose.rotation.norm() - 1.0).abs() < 1e-4 {
-        Ok(())
-    } else {
-        Err(format!("accepted pose is not a rigid motion: {pose:?}"))
-    }
-}
-
-fn pick<'a, T>(items: &'a [T], rng: &mut ChaCha8Rng) -> &'a T {
-    &items[rng.random_range(0..items.len())]
-}
 
 #[expect(
     clippy::ptr_arg,
@@ -343,118 +317,4 @@ fn config_files_never_panic_and_valid_ones_build_a_mapper() {
         Ok(Verdict::Accepted)
     };
     fuzz("config_toml", generate, execute, save_bytes);
-}
-
-/// A random edit of one file of `files`: a format-aware mutation, another file's content, an
-/// empty file, deletion, a folder in its place, or a rename to an odd frame number.
-fn folder_edit(files: &FileSet, rng: &mut ChaCha8Rng) -> FolderEdit {
-    let paths: Vec<&String> = files.keys().collect();
-    let path = (*pick(&paths, rng)).clone();
-    let bytes = &files[&path];
-    match rng.random_range(0..12) {
-        0 => FolderEdit::Delete { path },
-        1 => FolderEdit::Folder { path },
-        2 => {
-            let (dir, name) = path.rsplit_once('/').unwrap_or(("", &path));
-            let digits: String = name.chars().filter(char::is_ascii_digit).collect();
-            let number = *pick(
-                &[
-                    "01",
-                    "7",
-                    "-1",
-                    "1.5",
-                    "",
-                    "18446744073709551615",
-                    "99999999999999999999",
-                ],
-                rng,
-            );
-            let renamed = if digits.is_empty() {
-                format!("{name}.bak")
-            } else {
-                name.replacen(&digits, number, 1)
-            };
-            let to = if dir.is_empty() {
-                renamed
-            } else {
-                format!("{dir}/{renamed}")
-            };
-            if to == path {
-                FolderEdit::Delete { path }
-            } else {
-                FolderEdit::Rename { from: path, to }
-            }
-        }
-        3 => FolderEdit::Replace {
-            bytes: files[*pick(&paths, rng)].clone(),
-            path,
-        },
-        4 => FolderEdit::Replace {
-            path,
-            bytes: Vec::new(),
-        },
-        _ => {
-            let bytes = if path.ends_with(".png") {
-                match rng.random_range(0..4) {
-                    0 => generate_png(rng),
-                    _ => mutate_png(bytes, rng),
-                }
-            } else if path.ends_with(".txt") || path.ends_with(".json") {
-                mutate_text(&String::from_utf8_lossy(bytes), &[], rng)
-            } else {
-                mutate_bytes(bytes, &[], rng)
-            };
-            FolderEdit::Replace { path, bytes }
-        }
-    }
-}
-
-/// Opens a sequence in the edited folder and reads every frame.
-fn read_all<S: FrameSource>(
-    folder: &Folder,
-    edit: &FolderEdit,
-    open: impl Fn(&Path) -> catmap::Result<S>,
-) -> Execution {
-    let _restore = folder.apply_until_dropped(edit);
-    let needle = folder.path().display().to_string();
-    let sequence = match open(folder.path()) {
-        Ok(sequence) => sequence,
-        Err(e) => return rejected_naming(&e, &needle),
-    };
-    let mut verdict = Verdict::Accepted;
-    for position in 0..sequence.len() {
-        match sequence.read_frame(position) {
-            Ok(frame) => check_frame(&frame)?,
-            Err(e) => verdict = rejected_naming(&e, &needle)?,
-        }
-    }
-    Ok(verdict)
-}
-
-#[test]
-fn replica_folders_with_a_damaged_file_never_panic_and_errors_name_the_file() {
-    let folder = Folder::new(replica_files(2));
-    let files = folder.files().clone();
-    let open = |dir: &Path| ReplicaSequence::open(dir, &ReplicaOptions::default());
-    let execute = |edit: &FolderEdit| read_all(&folder, edit, open);
-    fuzz(
-        "replica_folder",
-        |rng| folder_edit(&files, rng),
-        execute,
-        FolderEdit::describe,
-    );
-}
-
-#[test]
-fn scannet_folders_with_a_damaged_file_never_panic_and_errors_name_the_file() {
-    let folder = Folder::new(scannet_files(2));
-    let files = folder.files().clone();
-    let open = |dir: &Path| ScanNetSequence::open(dir, &ScanNetOptions::default());
-    let execute = |edit: &FolderEdit| read_all(&folder, edit, open);
-    fuzz(
-        "scannet_folder",
-        |rng| folder_edit(&files, rng),
-        execute,
-        FolderEdit::describe,
-    );
 }

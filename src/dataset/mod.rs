@@ -5,6 +5,7 @@ pub mod camera_spec;
 pub mod decode_guard;
 pub mod images;
 pub mod replica;
+pub mod resize;
 pub mod scannet;
 
 use crate::error::Result;

@@ -33,8 +33,9 @@ use crate::dataset::camera_spec::{
 };
 use crate::dataset::images::{
     Image, check_depth_options, depth_to_metres_in_place, numbered_files, read_grey_as, read_rgb, read_size,
-    require_size, resize_bilinear_rgb, resize_nearest, size_text,
+    require_size, size_text,
 };
+use crate::dataset::resize::{resize_bilinear_rgb, resize_nearest};
 use crate::error::{CatmapError, Result};
 use crate::frame::{CameraIntrinsics, InstanceLabel, InstanceMask, RgbdFrame};
 use crate::ids::{ClassId, FrameIndex, ObjectId};

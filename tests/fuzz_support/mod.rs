@@ -10,6 +10,7 @@
 //! inputs that abort the process, e.g. on a failed allocation).
 #![allow(dead_code, reason = "each test crate uses a different subset")]
 
+pub mod checks;
 pub mod fixtures;
 pub mod mutate;
 pub mod png;
@@ -18,7 +19,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use rand::SeedableRng;
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// Seconds per target in a plain `cargo test`.
@@ -51,6 +52,11 @@ pub struct Report {
     pub failures: Vec<String>,
     /// Wall-clock time.
     pub elapsed: Duration,
+}
+
+/// A uniformly drawn element of `items` (not empty).
+pub fn pick<'a, T>(items: &'a [T], rng: &mut ChaCha8Rng) -> &'a T {
+    &items[rng.random_range(0..items.len())]
 }
 
 /// Time budget per target: `CATMAP_FUZZ_SECONDS`, else [`DEFAULT_SECONDS`].
