@@ -9,6 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::category::{Alignment, PairRegistration, SubcategoryRule, subcategorize};
+use crate::config::FieldConfig;
 use crate::error::{CatmapError, Result};
 use crate::ids::ObjectId;
 use crate::nocs::{NocsFrame, aligned_member_frame, representative_frame};
@@ -36,7 +37,9 @@ pub struct CategoryConfig {
     /// A class is registered again when one of its members' clouds has grown by more than this
     /// fraction since the class was last registered (0.2 = 20 %), or when it gains a member.
     pub reregister_growth: f32,
-    /// Members' fields must have taken this many steps before their uncertainty is trusted.
+    /// Members' fields must have taken this many steps before their uncertainty is trusted
+    /// (online; offline, the whole per-object training: see
+    /// [`CategoryConfig::field_steps_before_registration`]).
     pub min_field_steps: u64,
     /// Members' clouds are thinned to this voxel before registration and Chamfer scores, metres.
     pub cloud_voxel_m: f32,
@@ -56,6 +59,20 @@ impl Default for CategoryConfig {
             min_field_steps: 200,
             cloud_voxel_m: 0.02,
             min_extent_m: 0.10,
+        }
+    }
+}
+
+impl CategoryConfig {
+    /// Steps every member's field must have taken before its class is registered: online,
+    /// `min_field_steps`; offline, all of the per-object training (as the reference code, which
+    /// ranks uncertainty on the finished vMAP fields — early fields are confidently wrong in
+    /// space no camera saw, which hides how well each member was observed).
+    pub fn field_steps_before_registration(&self, fields: &FieldConfig) -> u64 {
+        if fields.offline {
+            self.min_field_steps.max(fields.offline_iterations as u64)
+        } else {
+            self.min_field_steps
         }
     }
 }
@@ -173,5 +190,32 @@ impl PairRegistration for ClassClouds<'_> {
         };
         let aligned: Vec<Point3<f32>> = s.iter().map(|p| template_from_source * p).collect();
         normalised_one_way_chamfer(t, &aligned).unwrap_or(f32::INFINITY)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offline_classes_wait_for_the_whole_per_object_training() {
+        let cfg = CategoryConfig::default();
+        let online = FieldConfig::default();
+        assert_eq!(cfg.field_steps_before_registration(&online), cfg.min_field_steps);
+        let offline = FieldConfig {
+            offline: true,
+            offline_iterations: 1_500,
+            ..FieldConfig::default()
+        };
+        assert_eq!(cfg.field_steps_before_registration(&offline), 1_500);
+        let short = FieldConfig {
+            offline_iterations: 50,
+            ..offline
+        };
+        assert_eq!(
+            cfg.field_steps_before_registration(&short),
+            cfg.min_field_steps,
+            "never before the fields are trusted at all"
+        );
     }
 }

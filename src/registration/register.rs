@@ -141,7 +141,7 @@ pub fn register_to_representative<R: Rng + ?Sized>(
                 fine.refine(pose, &stage(gate, cfg.refine_iterations))
             });
             let pose = fine.refine(pose, &final_stage);
-            (k, pose, fine.score(&pose, cfg.keep_fraction))
+            (k, pose, fine.score(&pose, 1.0))
         })
         .collect();
     refined.sort_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)));

@@ -48,6 +48,7 @@ pub fn register_categories(
     if !cfg.enabled || !settings.0.fields.enabled {
         return;
     }
+    let steps_needed = cfg.field_steps_before_registration(&settings.0.fields);
     let mut due: Vec<(Entity, ClassId, Vec<Ready>)> = Vec::new();
     for (entity, category, previous) in &categories {
         let mut ready = Vec::new();
@@ -57,7 +58,7 @@ pub fn register_categories(
             else {
                 break;
             };
-            if loss.steps < cfg.min_field_steps {
+            if loss.steps < steps_needed {
                 break;
             }
             ready.push(Ready {
