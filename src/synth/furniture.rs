@@ -9,7 +9,7 @@ use std::f32::consts::{FRAC_PI_4, SQRT_2, TAU};
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
-use super::primitives::{beam, block, curved_panel, cylinder, frustum};
+use super::primitives::{beam, block, cylinder, frustum};
 use crate::classes::replica;
 use crate::ids::ClassId;
 use crate::mesh::TriangleMesh;
@@ -20,8 +20,9 @@ use crate::mesh::TriangleMesh;
 pub enum Design {
     /// Wooden chair: four thin legs, thin seat, tall back of horizontal slats.
     LadderBackChair,
-    /// Office chair: round seat on a central column over a five-arm star base, low curved back.
-    SwivelChair,
+    /// Open-frame lounge armchair, 0.8 × 0.7 m: four posts carrying the arm rails, a wide low
+    /// upholstered seat and a low solid back.
+    Armchair,
     /// Four-legged table, 1.6 × 0.9 × 0.75 m, high enough for chairs to tuck under.
     DiningTable,
     /// Two-door cabinet on a plinth, 0.8 × 0.45 × 1.2 m.
@@ -44,7 +45,7 @@ impl Design {
     /// Every design, in a fixed order.
     pub const ALL: [Design; 8] = [
         Self::LadderBackChair,
-        Self::SwivelChair,
+        Self::Armchair,
         Self::DiningTable,
         Self::Cabinet,
         Self::StorageBox,
@@ -57,7 +58,7 @@ impl Design {
     pub fn name(self) -> &'static str {
         match self {
             Self::LadderBackChair => "ladder_back_chair",
-            Self::SwivelChair => "swivel_chair",
+            Self::Armchair => "armchair",
             Self::DiningTable => "dining_table",
             Self::Cabinet => "cabinet",
             Self::StorageBox => "storage_box",
@@ -70,7 +71,7 @@ impl Design {
     /// Replica semantic class of the design.
     pub fn class(self) -> ClassId {
         match self {
-            Self::LadderBackChair | Self::SwivelChair => replica::CHAIR,
+            Self::LadderBackChair | Self::Armchair => replica::CHAIR,
             Self::DiningTable => replica::TABLE,
             Self::Cabinet => replica::CABINET,
             Self::StorageBox => replica::BOX,
@@ -89,7 +90,7 @@ impl Design {
     pub fn parts(self) -> Vec<TriangleMesh> {
         match self {
             Self::LadderBackChair => ladder_back_chair(),
-            Self::SwivelChair => swivel_chair(),
+            Self::Armchair => armchair(),
             Self::DiningTable => dining_table(),
             Self::Cabinet => cabinet(),
             Self::StorageBox => storage_box(),
@@ -126,37 +127,18 @@ fn ladder_back_chair() -> Vec<TriangleMesh> {
     parts
 }
 
-fn swivel_chair() -> Vec<TriangleMesh> {
+fn armchair() -> Vec<TriangleMesh> {
     let fabric = [40, 70, 130];
-    let mut parts = vec![paint(cylinder(Point3::new(0.0, 0.0, 0.02), 0.05, 0.07, 12), METAL_DARK)];
-    for k in 0..5 {
-        let a = TAU * k as f32 / 5.0 + FRAC_PI_4;
-        let (s, c) = a.sin_cos();
-        let arm = beam(
-            Point3::new(0.04 * c, 0.04 * s, 0.05),
-            Point3::new(0.3 * c, 0.3 * s, 0.05),
-            0.04,
-        );
-        parts.push(paint(arm, METAL_DARK));
-        parts.push(paint(
-            cylinder(Point3::new(0.28 * c, 0.28 * s, 0.0), 0.025, 0.03, 10),
-            METAL_DARK,
-        ));
+    let (x, y, post) = (0.375, 0.325, 0.04);
+    let mut parts = Vec::new();
+    for sx in [-x, x] {
+        parts.push(paint(block(sx, y, 0.0, [post, post, 0.6]), WOOD)); // front post
+        parts.push(paint(block(sx, -y, 0.0, [post, post, 0.6]), WOOD)); // rear post
+        parts.push(paint(block(sx, 0.0, 0.57, [0.07, 0.7, 0.03]), WOOD)); // arm rail
+        parts.push(paint(block(sx, 0.0, 0.15, [0.03, 2.0 * y, 0.04]), WOOD)); // side stretcher
     }
-    parts.push(paint(
-        cylinder(Point3::new(0.0, 0.0, 0.09), 0.025, 0.31, 12),
-        [150, 150, 155],
-    ));
-    parts.push(paint(cylinder(Point3::new(0.0, 0.0, 0.40), 0.24, 0.07, 28), fabric));
-    let support = beam(Point3::new(0.0, -0.19, 0.47), Point3::new(0.0, -0.235, 0.60), 0.04);
-    parts.push(paint(support, METAL_DARK));
-    let back = curved_panel(
-        (0.22, 0.26),
-        (200f32.to_radians(), 340f32.to_radians()),
-        (0.56, 0.84),
-        14,
-    );
-    parts.push(paint(back, fabric));
+    parts.push(paint(block(0.0, 0.0, 0.31, [0.7, 0.65, 0.05]), fabric)); // seat
+    parts.push(paint(block(0.0, -y, 0.36, [0.7, 0.04, 0.36]), fabric)); // back, up to 0.72 m
     parts
 }
 
@@ -287,13 +269,13 @@ mod tests {
     #[test]
     fn chair_designs_differ_in_shape() {
         let a = Design::LadderBackChair.mesh().bounds().expect("chair A");
-        let b = Design::SwivelChair.mesh().bounds().expect("chair B");
+        let b = Design::Armchair.mesh().bounds().expect("chair B");
         assert!(a.max.z > b.max.z + 0.05, "the ladder-back is the taller chair");
         assert!(
             b.extent().x > a.extent().x + 0.1,
-            "the star base is wider than the legs"
+            "the armchair is wider than the ladder-back"
         );
-        assert!(Design::LadderBackChair.is_chair() && Design::SwivelChair.is_chair());
+        assert!(Design::LadderBackChair.is_chair() && Design::Armchair.is_chair());
     }
 
     #[test]

@@ -155,12 +155,20 @@ fn try_layout<R: Rng + ?Sized>(
         shuffle(&mut chairs, rng);
         let mut slots = table_slots();
         shuffle(&mut slots, rng);
-        let mut free_slots = slots.into_iter();
-        for &chair in chairs.iter().take(furnishing.tucked_chairs) {
-            // A slot that fits no tuck stays free; the chair then goes elsewhere below.
-            free_slots.by_ref().find(|slot| {
+        let mut tucked = 0;
+        for &chair in &chairs {
+            if tucked == furnishing.tucked_chairs {
+                break;
+            }
+            // A chair that fits no free slot (an armchair is wider than the gap between the table's
+            // legs) goes elsewhere below, and the next chair tries.
+            let fits = |slot: &TableSlot, draft: &mut Draft<'_>, rng: &mut R| {
                 (0..40).any(|_| draft.try_place(chair, designs[chair], tucked_pose(table_pose, slot, rng)))
-            });
+            };
+            if let Some(k) = (0..slots.len()).find(|&k| fits(&slots[k], &mut draft, rng)) {
+                slots.remove(k);
+                tucked += 1;
+            }
         }
     }
     for (i, &design) in designs.iter().enumerate() {

@@ -100,9 +100,9 @@ impl Preset {
             },
             Self::Default => {
                 let ladder_backs = pick(draws[0], &[3, 4]);
-                let swivels = pick(draws[1], &[3, 4]);
+                let armchairs = pick(draws[1], &[3, 4]);
                 let mut designs = vec![Design::LadderBackChair; ladder_backs];
-                designs.extend(std::iter::repeat_n(Design::SwivelChair, swivels));
+                designs.extend(std::iter::repeat_n(Design::Armchair, armchairs));
                 designs.extend([
                     Design::DiningTable,
                     Design::Cabinet,
@@ -146,7 +146,7 @@ mod tests {
         for draws in [[0.0, 0.0], [0.99, 0.99], [0.2, 0.7]] {
             let f = Preset::Default.furnishing(draws);
             let count = |d: Design| f.designs.iter().filter(|&&x| x == d).count();
-            assert!(count(Design::LadderBackChair) >= 3 && count(Design::SwivelChair) >= 3);
+            assert!(count(Design::LadderBackChair) >= 3 && count(Design::Armchair) >= 3);
             assert!((12..=16).contains(&f.designs.len()), "{} objects", f.designs.len());
         }
     }
