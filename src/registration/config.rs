@@ -51,9 +51,10 @@ pub struct RegistrationConfig {
     pub search_gates_m: Vec<f32>,
     /// Most iterations of each coarse stage.
     pub search_iterations: usize,
-    /// Trimmed ICP and candidate ranking: fraction of the closest pairs kept.
+    /// Trimmed ICP and the coarse ranking of starts: fraction of the closest pairs kept.
     pub keep_fraction: f32,
-    /// Candidates (best coarse scores, one per distinct pose) refined on the fine clouds.
+    /// Candidates (best coarse scores, one per distinct pose) refined on the fine clouds; the one
+    /// with the smallest whole (untrimmed) one-way Chamfer distance wins, as in the reference.
     pub refined_candidates: usize,
     /// Trimmed-ICP gates of the fine stages, metres, before the final plain ICP.
     pub refine_gates_m: Vec<f32>,
