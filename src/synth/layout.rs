@@ -162,10 +162,10 @@ fn try_layout<R: Rng + ?Sized>(
             }
             // A chair that fits no free slot (an armchair is wider than the gap between the table's
             // legs) goes elsewhere below, and the next chair tries.
-            let fits = |slot: &TableSlot, draft: &mut Draft<'_>, rng: &mut R| {
+            let fitting = slots.iter().position(|slot| {
                 (0..40).any(|_| draft.try_place(chair, designs[chair], tucked_pose(table_pose, slot, rng)))
-            };
-            if let Some(k) = (0..slots.len()).find(|&k| fits(&slots[k], &mut draft, rng)) {
+            });
+            if let Some(k) = fitting {
                 slots.remove(k);
                 tucked += 1;
             }
