@@ -44,8 +44,8 @@ pub struct RunArgs {
     /// Stream to a running Rerun viewer (default address: rerun+http://127.0.0.1:9876/proxy).
     #[arg(long, num_args = 0..=1, default_missing_value = "rerun+http://127.0.0.1:9876/proxy")]
     pub rerun_connect: Option<String>,
-    /// Field model: per-object fields (vMAP*), or category-level fields.
-    #[arg(long, value_enum, default_value_t = MapMode::Instance)]
+    /// Field model: category-level fields (the paper), or per-object fields only (vMAP*).
+    #[arg(long, value_enum, default_value_t = MapMode::Category)]
     pub mode: MapMode,
     /// Offline protocol: read every frame first, then train (`fields.offline_iterations` steps).
     #[arg(long)]
@@ -89,10 +89,10 @@ pub enum Switch {
 /// Field models.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum MapMode {
+    /// Category-level fields shared by objects of one shape (the paper; the default).
+    Category,
     /// One occupancy field per object (the paper's vMAP* baseline).
     Instance,
-    /// Category-level fields shared by objects of one shape (the paper).
-    Category,
 }
 
 /// Dataset layouts.
@@ -166,9 +166,13 @@ fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
     if let Some(max_frames) = args.max_frames {
         config.stream.max_frames = Some(max_frames);
     }
-    if args.mode == MapMode::Category {
-        config.categories.enabled = true;
-        config.category_fields.enabled = true;
+    match args.mode {
+        MapMode::Category => {
+            config.categories.enabled = true;
+            config.category_fields.enabled = true;
+        }
+        // Registration alone (categories.json) stays as the config file says.
+        MapMode::Instance => config.category_fields.enabled = false,
     }
     if let Some(iterations) = args.category_iterations {
         config.category_fields.iterations = iterations;
@@ -193,4 +197,38 @@ fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
     }
     config.validate().context("invalid settings")?;
     Ok(config)
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: RunArgs,
+    }
+
+    fn config_of(argv: &[&str]) -> catmap::MapperConfig {
+        let cli = Cli::try_parse_from(std::iter::once("catmap").chain(argv.iter().copied())).expect("arguments parse");
+        config_from_args(&cli.args).expect("valid config")
+    }
+
+    #[test]
+    fn category_mode_is_the_default() {
+        let config = config_of(&[]);
+        assert!(config.categories.enabled && config.category_fields.enabled);
+        let cli = Cli::try_parse_from(["catmap"]).expect("arguments parse");
+        assert_eq!(cli.args.mode, MapMode::Category);
+    }
+
+    #[test]
+    fn instance_mode_trains_no_category_fields() {
+        let config = config_of(&["--mode", "instance"]);
+        assert!(!config.category_fields.enabled);
+        let config = config_of(&["--mode", "instance", "--subcategories", "off", "--offline"]);
+        assert!(!config.category_fields.enabled && !config.categories.subcategories.enabled && config.fields.offline);
+    }
 }
