@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use bevy_ecs::prelude::*;
 use catmap::class_registration::{MemberInput, register_class};
 use catmap::rng::{RngStream, seeded_rng};
-use catmap::uncertainty::object_reliability;
+use catmap::uncertainty::{axis_aligned_extent, object_reliability};
 use catmap::{ClassId, ObjectId};
 use nalgebra::Point3;
 use rayon::prelude::*;
@@ -102,10 +102,11 @@ pub fn register_categories(
                 .par_iter()
                 .map(|r| {
                     let field = fields.objects.field(r.slot.index)?;
+                    let (center, half_extents) = axis_aligned_extent(&r.cloud)?;
                     let mut rng = seeded_rng(seed, RngStream::ObjectField(r.id));
                     Some(object_reliability(
-                        &r.bounds.center(),
-                        &r.bounds.half_extents,
+                        &center,
+                        &half_extents,
                         &cfg.uncertainty,
                         &mut rng,
                         |points| field.eval_alpha_world(&r.slot.origin, points),
