@@ -34,6 +34,7 @@ struct Args {
     iterations: usize,
 }
 
+#[expect(clippy::print_stdout, reason = "a benchmark prints its figures")]
 fn main() -> anyhow::Result<()> {
     tracing_subscriber::fmt().with_env_filter("warn").init();
     let args = Args::parse();
@@ -48,6 +49,7 @@ fn main() -> anyhow::Result<()> {
 }
 
 /// Prints one scene's groups; returns (representatives above the median, groups).
+#[expect(clippy::print_stdout, reason = "a benchmark prints its figures")]
 fn check_scene(seed: u64, args: &Args) -> anyhow::Result<(usize, usize)> {
     let scene = SyntheticScene::generate(seed, Preset::Default)?;
     let mut config = MapperConfig {
@@ -89,7 +91,7 @@ fn check_scene(seed: u64, args: &Args) -> anyhow::Result<(usize, usize)> {
             let mut fractions: Vec<f32> = ids.iter().map(|id| observed.get(id).copied().unwrap_or(0.0)).collect();
             fractions.sort_by(f32::total_cmp);
             let n = fractions.len();
-            let median = if n % 2 == 0 {
+            let median = if n.is_multiple_of(2) {
                 0.5 * (fractions[n / 2 - 1] + fractions[n / 2])
             } else {
                 fractions[n / 2]
