@@ -7,7 +7,8 @@ use serde::{Deserialize, Serialize};
 #[serde(default, deny_unknown_fields)]
 pub struct CategoryFieldConfig {
     /// Train one shared field per subcategory with more than one member (category mode). Needs
-    /// `categories.enabled`; single-member subcategories keep their per-object fields.
+    /// `categories.enabled`; single-member subcategories keep their per-object fields. `catmap run`
+    /// sets it from `--mode` (category, the default: on; instance: off).
     pub enabled: bool,
     /// Steps of the category fields once the classes are registered (the paper's 10⁴).
     pub iterations: usize,
