@@ -16,9 +16,12 @@ use catmap::classes::replica_name;
 use catmap::config::FieldConfig;
 use catmap::dataset::FrameSource;
 use catmap::synth::{Preset, SyntheticScene};
+use catmap::uncertainty::{RepresentativeChoice, choose_representative};
 use catmap::{MapperConfig, ObjectId};
 use catmap_systems::Mapper;
 use clap::Parser;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
 
 /// Arguments.
 #[derive(Parser, Debug)]
@@ -79,11 +82,13 @@ fn check_scene(seed: u64, args: &Args) -> anyhow::Result<(usize, usize)> {
         }
         let name = class.name.as_deref().or(replica_name(class.class)).unwrap_or("?");
         let rays: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.reliable_rays.unwrap_or(0))).collect();
-        // The class's representative: the most reliable rays (ties: smaller id), as the ranking.
-        let class_rep = rays
-            .iter()
-            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
-            .map(|(id, _)| *id);
+        // The class's representative by the uncertainty ranking (it draws nothing from the RNG).
+        let ranked: Vec<(ObjectId, usize)> = rays.iter().map(|(id, n)| (*id, *n)).collect();
+        let class_rep = choose_representative(
+            &ranked,
+            RepresentativeChoice::Uncertainty,
+            &mut ChaCha8Rng::seed_from_u64(0),
+        );
         let mut report = |label: String, ids: Vec<ObjectId>, rep: Option<ObjectId>| {
             if ids.len() < 2 {
                 return;

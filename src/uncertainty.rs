@@ -1,8 +1,8 @@
 //! Ray-based uncertainty of an object's field and the representative of a class (METHOD.md §3).
 //!
 //! Rays start on a sphere around the object — centre = the centre of the observed cloud's
-//! axis-aligned box, radius `r` = 1.2 × that box's half-diagonal (every half-extent at least 5 cm;
-//! [`axis_aligned_extent`]) — at φ ∈ linspace(0, π, n) ×
+//! axis-aligned box ([`crate::mesh::Aabb`]), radius `r` = 1.2 × that box's half-diagonal (every
+//! half-extent at least 5 cm) — at φ ∈ linspace(0, π, n) ×
 //! θ ∈ linspace(0, 2π, n), and cross to the antipodal point with 96 stratified samples in [0, 2r].
 //! Along a ray, with the reference code's sharper occupancy o_i = σ(10·α_i):
 //!
@@ -85,16 +85,6 @@ pub struct SphereRays {
     pub directions: Vec<Vector3<f32>>,
     /// Sphere radius, metres.
     pub radius: f32,
-}
-
-/// The centre and half-extents of the axis-aligned box of `points` (world axes, as the reference
-/// code's sphere), or `None` for an empty cloud.
-pub fn axis_aligned_extent(points: &[Point3<f32>]) -> Option<(Point3<f32>, Vector3<f32>)> {
-    let first = points.first()?;
-    let (lo, hi) = points.iter().fold((first.coords, first.coords), |(lo, hi), p| {
-        (lo.inf(&p.coords), hi.sup(&p.coords))
-    });
-    Some((Point3::from((lo + hi) * 0.5), (hi - lo) * 0.5))
 }
 
 /// The rays around a box with `center` and `half_extents` (see the module doc).
@@ -235,19 +225,6 @@ mod tests {
                 "the ray passes the centre"
             );
         }
-    }
-
-    #[test]
-    fn the_sphere_box_is_the_clouds_axis_aligned_box() {
-        let cloud = [
-            Point3::new(1.0, 0.0, 0.5),
-            Point3::new(2.0, -1.0, 0.0),
-            Point3::new(1.5, 3.0, 0.25),
-        ];
-        let (center, half) = axis_aligned_extent(&cloud).expect("non-empty");
-        assert!((center - Point3::new(1.5, 1.0, 0.25)).norm() < 1e-6);
-        assert!((half - Vector3::new(0.5, 2.0, 0.25)).norm() < 1e-6);
-        assert_eq!(axis_aligned_extent(&[]), None);
     }
 
     #[test]

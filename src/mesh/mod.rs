@@ -231,6 +231,19 @@ mod tests {
     }
 
     #[test]
+    fn a_point_box_has_its_centre_and_extent_and_no_points_have_none() {
+        let cloud = [
+            Point3::new(1.0, 0.0, 0.5),
+            Point3::new(2.0, -1.0, 0.0),
+            Point3::new(1.5, 3.0, 0.25),
+        ];
+        let b = Aabb::from_points(&cloud).expect("non-empty");
+        assert!((b.center() - Point3::new(1.5, 1.0, 0.25)).norm() < 1e-6);
+        assert!((b.extent() - Vector3::new(1.0, 4.0, 0.5)).norm() < 1e-6);
+        assert!(Aabb::from_points(&[]).is_none());
+    }
+
+    #[test]
     fn samples_are_uniform_over_unequal_triangles() {
         // Triangle 0 covers 3/4 of the area of this quad, triangle 1 a quarter.
         let v = [[0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [3.0, 1.0, 0.0], [0.0, 1.0, 0.0]];

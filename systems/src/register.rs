@@ -6,8 +6,9 @@ use std::collections::BTreeMap;
 
 use bevy_ecs::prelude::*;
 use catmap::class_registration::{MemberInput, register_class};
+use catmap::mesh::Aabb;
 use catmap::rng::{RngStream, seeded_rng};
-use catmap::uncertainty::{axis_aligned_extent, object_reliability};
+use catmap::uncertainty::object_reliability;
 use catmap::{ClassId, ObjectId};
 use nalgebra::Point3;
 use rayon::prelude::*;
@@ -102,11 +103,12 @@ pub fn register_categories(
                 .par_iter()
                 .map(|r| {
                     let field = fields.objects.field(r.slot.index)?;
-                    let (center, half_extents) = axis_aligned_extent(&r.cloud)?;
+                    // The sphere around the observed cloud's world-axis box (METHOD.md §3).
+                    let aabb = Aabb::from_points(&r.cloud)?;
                     let mut rng = seeded_rng(seed, RngStream::ObjectField(r.id));
                     Some(object_reliability(
-                        &center,
-                        &half_extents,
+                        &aabb.center(),
+                        &(aabb.extent() * 0.5),
                         &cfg.uncertainty,
                         &mut rng,
                         |points| field.eval_alpha_world(&r.slot.origin, points),
