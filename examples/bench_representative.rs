@@ -4,7 +4,8 @@
 //! the class registration), and prints for every class with several members, and for each of its
 //! subcategories, every member's observed surface fraction (ground truth: the share of the
 //! object's surface that some frame sees), its reliable uncertainty rays and whether the
-//! representative's fraction is above the group's median.
+//! representative's fraction is above the group's median; then the seconds the whole scene's
+//! uncertainty spheres and its registration + subcategorisation took.
 //!
 //! ```text
 //! cargo run --release --example bench_representative -- --seeds 0,1,2,3
@@ -127,5 +128,12 @@ fn check_scene(seed: u64, args: &Args) -> anyhow::Result<(usize, usize)> {
             }
         }
     }
+    let seconds = mapper.stage_seconds();
+    let stage = |name: &str| seconds.get(name).copied().unwrap_or(0.0);
+    println!(
+        "seed {seed} whole scene: uncertainty {:.2} s, registration and subcategories {:.2} s",
+        stage("uncertainty"),
+        stage("register")
+    );
     Ok((above, groups))
 }

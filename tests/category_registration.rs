@@ -15,7 +15,7 @@ use catmap::{MapperConfig, ObjectId};
 use catmap_systems::categories_report::ClassRecord;
 use nalgebra::{Matrix3, Matrix4, Point3};
 
-fn map_default_scene() -> (SyntheticScene, Vec<ClassRecord>) {
+fn map_default_scene() -> (SyntheticScene, Vec<ClassRecord>, BTreeMap<String, f64>) {
     let scene = SyntheticScene::generate(0, Preset::Default).expect("default scene");
     let mut config = MapperConfig {
         seed: 0,
@@ -29,7 +29,8 @@ fn map_default_scene() -> (SyntheticScene, Vec<ClassRecord>) {
     config.categories.enabled = true;
     let mut mapper = common::mapping::map_scene(&scene, (0..scene.len()).step_by(2), config);
     let records = mapper.category_records();
-    (scene, records)
+    let stages = mapper.stage_seconds();
+    (scene, records, stages)
 }
 
 /// Smallest rotation angle (degrees) between two box orientations, modulo the box's 24 axis
@@ -46,7 +47,14 @@ fn box_rotation_error_deg(a: &Matrix3<f32>, b: &Matrix3<f32>) -> f32 {
 
 #[test]
 fn the_default_scene_splits_the_chair_designs_and_aligns_every_box() {
-    let (scene, records) = map_default_scene();
+    let (scene, records, stages) = map_default_scene();
+    // The uncertainty spheres and the registration proper are timed as separate stages.
+    for stage in ["uncertainty", "register"] {
+        assert!(
+            stages.get(stage).is_some_and(|s| *s > 0.0),
+            "stage {stage} timed: {stages:?}"
+        );
+    }
     let observed = scene.observed_surface_fraction().clone();
     let chair = records
         .iter()

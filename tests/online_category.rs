@@ -2,7 +2,6 @@
 //! are registered and train beside the per-object fields on every frame; members carry their
 //! slot (field, code, NOCS frame); a membership change keeps every field that survives.
 
-use bevy_ecs::prelude::*;
 use catmap::config::FieldConfig;
 use catmap::dataset::FrameSource;
 use catmap::synth::{Preset, SyntheticScene};

@@ -96,7 +96,7 @@ impl Default for RegistrationConfig {
             search_gates_m: vec![0.3, 0.1],
             search_iterations: 20,
             keep_fraction: 0.8,
-            refined_candidates: 6,
+            refined_candidates: 3,
             refine_gates_m: vec![0.05, 0.025],
             refine_iterations: 30,
             twists: 6,

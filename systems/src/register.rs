@@ -3,6 +3,7 @@
 //! frame. Members wait until their fields have trained (uncertainty needs a trained field).
 
 use std::collections::BTreeMap;
+use std::time::Instant;
 
 use bevy_ecs::prelude::*;
 use catmap::class_registration::{MemberInput, register_class};
@@ -94,10 +95,10 @@ pub fn register_categories(
     if due.is_empty() {
         return;
     }
-    let _timer = times.start("register");
     let seed = settings.0.seed;
     for (category_entity, class, ready) in due {
         // Uncertainty spheres (only needed to rank several members).
+        let started = Instant::now();
         let reliabilities: Vec<_> = if ready.len() > 1 {
             ready
                 .par_iter()
@@ -118,6 +119,8 @@ pub fn register_categories(
         } else {
             vec![None]
         };
+        times.add("uncertainty", started.elapsed());
+        let started = Instant::now();
         let inputs: Vec<MemberInput> = ready
             .iter()
             .zip(&reliabilities)
@@ -129,7 +132,9 @@ pub fn register_categories(
             })
             .collect();
         let class_seed = seed ^ (u64::from(class.0) << 32);
-        let groups = match register_class(&inputs, cfg, class_seed) {
+        let registered = register_class(&inputs, cfg, class_seed);
+        times.add("register", started.elapsed());
+        let groups = match registered {
             Ok(groups) => groups,
             Err(e) => {
                 tracing::warn!(class = %class, error = %e, "class registration failed");

@@ -55,6 +55,11 @@ impl StageTimes {
             started: Instant::now(),
         }
     }
+
+    /// Adds `elapsed` to `stage`.
+    pub fn add(&mut self, stage: &str, elapsed: Duration) {
+        *self.0.entry(stage.to_owned()).or_default() += elapsed;
+    }
 }
 
 /// Adds the time since its creation to a stage when dropped.
@@ -66,13 +71,7 @@ pub struct StageTimer<'a> {
 
 impl Drop for StageTimer<'_> {
     fn drop(&mut self) {
-        let elapsed = self.started.elapsed();
-        match self.times.0.get_mut(self.stage) {
-            Some(total) => *total += elapsed,
-            None => {
-                self.times.0.insert(self.stage.to_owned(), elapsed);
-            }
-        }
+        self.times.add(self.stage, self.started.elapsed());
     }
 }
 
