@@ -10,7 +10,8 @@
 //!    normalised one-way Chamfer distance ([`trimmed_normalised_chamfer`]).
 //! 3. Fine: the `refined_candidates` best distinct poses run trimmed ICP at the `refine_gates_m`
 //!    and then METHOD's plain ICP (gate `icp_max_correspondence_m`) on clouds thinned to
-//!    `icp_voxel_m`; the best trimmed score wins (ties: lowest start index).
+//!    `icp_voxel_m`; the smallest whole (untrimmed) one-way Chamfer distance wins (ties: lowest
+//!    start index).
 //! 4. The reported score is METHOD's normalised one-way Chamfer distance of the whole aligned
 //!    source to the whole template (the subcategory rule's input).
 //!
