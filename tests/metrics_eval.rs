@@ -160,12 +160,17 @@ fn a_deleted_prediction_is_reported_missing_and_counted() {
         report.objects.len(),
         "every ground-truth object is counted"
     );
-    let class = &object(&report, FOLDERS.deleted).class_name;
+    let deleted = object(&report, FOLDERS.deleted);
+    let seen = deleted
+        .observed_surface_fraction
+        .expect("catmap's scene.json states the observed fraction");
     let table = render_markdown(&report);
     assert!(
         table.contains(&format!(
-            "| {} | {class} | missing | missing | 0.0 | 0.0 |",
-            FOLDERS.deleted
+            "| {} | {} | {:.1} | missing | missing | 0.0 | 0.0 |",
+            FOLDERS.deleted,
+            deleted.class_name,
+            100.0 * seen
         )),
         "{table}"
     );

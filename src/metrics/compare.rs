@@ -87,6 +87,7 @@ mod tests {
                 id: ObjectId(id),
                 class: None,
                 class_name: class.to_owned(),
+                observed_surface_fraction: None,
                 scores: ObjectScores {
                     status: PredictionStatus::Reconstructed,
                     accuracy_cm: Some(2.0),

@@ -1,8 +1,7 @@
-//! Evaluating a folder of predicted object meshes against a folder of ground-truth meshes.
+//! Evaluating a folder of predicted object meshes against the ground truth
+//! ([`GroundTruth`]: `gt_meshes/obj_{id}.ply`, the objects' classes).
 //!
 //! ```text
-//! gt_dir/gt_meshes/obj_{id}.ply   ground truth (or gt_dir/obj_{id}.ply when there is no gt_meshes/)
-//! gt_dir/scene.json               optional: objects[].id, class, class_name
 //! pred_dir/obj_{id}.ply           prediction (or pred_dir/meshes/obj_{id}.ply)
 //! ```
 //!
@@ -13,55 +12,41 @@
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
-use serde::Deserialize;
 
 use super::crop::Crop;
+use super::ground_truth::{GroundTruth, ObjectClasses, mesh_file_name};
 use super::object_scores::score_object;
 use super::report::{EvalSettings, EvaluationReport, ObjectMetrics};
-use crate::classes::replica_name;
 use crate::error::{CatmapError, Result};
-use crate::ids::{ClassId, ObjectId};
+use crate::ids::ObjectId;
 use crate::mesh::TriangleMesh;
 use crate::rng::{RngStream, seeded_rng};
 
-/// Class name of objects whose class is not known.
-pub const UNKNOWN_CLASS: &str = "unknown";
-
-/// One ground-truth object found on disk.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct GroundTruthEntry {
-    /// Instance id (from the file name `obj_{id}.ply`).
-    pub id: ObjectId,
-    /// Semantic class from `scene.json`, when listed.
-    pub class: Option<ClassId>,
-    /// Class name from `scene.json`, else the Replica name of the class, else `unknown`.
-    pub class_name: String,
-    /// The mesh file.
-    pub mesh_path: PathBuf,
-}
-
-/// [`evaluate_dirs_with`] with the default 10 000 samples per mesh.
+/// Scores `pred_dir` against the ground truth of `gt_dir` with the default 10 000 samples per
+/// mesh; classes come only from catmap's own `scene.json` (see [`GroundTruth::load`]).
 pub fn evaluate_dirs(pred_dir: &Path, gt_dir: &Path, crop: Crop, seed: u64) -> Result<EvaluationReport> {
-    evaluate_dirs_with(
-        pred_dir,
-        gt_dir,
-        &EvalSettings {
-            crop,
-            seed,
-            ..EvalSettings::default()
-        },
-    )
+    let ground_truth = GroundTruth::load(gt_dir, &ObjectClasses::new())?;
+    let settings = EvalSettings {
+        crop,
+        seed,
+        ..EvalSettings::default()
+    };
+    evaluate_ground_truth(pred_dir, &ground_truth, &settings)
 }
 
-/// Scores every ground-truth object of `gt_dir` against its prediction in `pred_dir` (see the
-/// module doc). Errors when a folder is missing, `gt_dir` holds no `obj_{id}.ply`, or a file
-/// cannot be read or parsed; a missing prediction is reported, not an error.
-pub fn evaluate_dirs_with(pred_dir: &Path, gt_dir: &Path, settings: &EvalSettings) -> Result<EvaluationReport> {
+/// Scores every object of `ground_truth` against its prediction in `pred_dir` (see the module
+/// doc). Errors when the prediction folder is missing or a mesh cannot be read or parsed (the
+/// error names the file); a missing prediction is reported, not an error.
+pub fn evaluate_ground_truth(
+    pred_dir: &Path,
+    ground_truth: &GroundTruth,
+    settings: &EvalSettings,
+) -> Result<EvaluationReport> {
     if !pred_dir.is_dir() {
         return Err(CatmapError::layout(pred_dir, "prediction folder does not exist"));
     }
-    let entries = list_ground_truth(gt_dir)?;
-    let objects = entries
+    let objects = ground_truth
+        .entries
         .par_iter()
         .map(|entry| -> Result<ObjectMetrics> {
             let gt = TriangleMesh::read_ply(&entry.mesh_path)?;
@@ -81,6 +66,7 @@ pub fn evaluate_dirs_with(pred_dir: &Path, gt_dir: &Path, settings: &EvalSetting
                 id: entry.id,
                 class: entry.class,
                 class_name: entry.class_name.clone(),
+                observed_surface_fraction: entry.observed_surface_fraction,
                 scores,
             })
         })
@@ -96,92 +82,10 @@ pub fn prediction_path(pred_dir: &Path, id: ObjectId) -> Option<PathBuf> {
         .find(|p| p.is_file())
 }
 
-/// `obj_{id}.ply`.
-pub fn mesh_file_name(id: ObjectId) -> String {
-    format!("obj_{id}.ply")
-}
-
-/// The ground-truth objects of `gt_dir`, in id order, with their classes (see the module doc).
-pub fn list_ground_truth(gt_dir: &Path) -> Result<Vec<GroundTruthEntry>> {
-    if !gt_dir.is_dir() {
-        return Err(CatmapError::layout(gt_dir, "ground-truth folder does not exist"));
-    }
-    let nested = gt_dir.join("gt_meshes");
-    let mesh_dir = if nested.is_dir() { nested } else { gt_dir.to_owned() };
-    let classes = read_scene_classes(&gt_dir.join("scene.json"))?;
-    let mut ids: Vec<ObjectId> = std::fs::read_dir(&mesh_dir)
-        .map_err(|e| CatmapError::io(&mesh_dir, e))?
-        .filter_map(|entry| entry.ok()?.file_name().to_str().and_then(parse_mesh_file_name))
-        .collect();
-    ids.sort_unstable();
-    ids.dedup();
-    if ids.is_empty() {
-        return Err(CatmapError::layout(
-            &mesh_dir,
-            "no ground-truth meshes named obj_{id}.ply",
-        ));
-    }
-    Ok(ids
-        .into_iter()
-        .map(|id| {
-            let listed = classes.iter().find(|c| c.id == id.0);
-            let class = listed.and_then(|c| c.class).map(ClassId);
-            let class_name = listed
-                .and_then(|c| c.class_name.clone())
-                .or_else(|| class.and_then(replica_name).map(str::to_owned))
-                .unwrap_or_else(|| UNKNOWN_CLASS.to_owned());
-            GroundTruthEntry {
-                id,
-                class,
-                class_name,
-                mesh_path: mesh_dir.join(mesh_file_name(id)),
-            }
-        })
-        .collect())
-}
-
-/// The id in a file name `obj_{id}.ply`.
-fn parse_mesh_file_name(name: &str) -> Option<ObjectId> {
-    name.strip_prefix("obj_")?
-        .strip_suffix(".ply")?
-        .parse()
-        .ok()
-        .map(ObjectId)
-}
-
-/// What `scene.json` says about one object (other fields are ignored).
-#[derive(Debug, Deserialize)]
-struct SceneObjectClass {
-    id: u32,
-    #[serde(default)]
-    class: Option<u32>,
-    #[serde(default)]
-    class_name: Option<String>,
-}
-
-#[derive(Debug, Deserialize)]
-struct SceneClasses {
-    #[serde(default)]
-    objects: Vec<SceneObjectClass>,
-}
-
-/// The object classes listed in `path`; none when the file does not exist.
-fn read_scene_classes(path: &Path) -> Result<Vec<SceneObjectClass>> {
-    if !path.is_file() {
-        return Ok(Vec::new());
-    }
-    let text = std::fs::read_to_string(path).map_err(|e| CatmapError::io(path, e))?;
-    let scene: SceneClasses = serde_json::from_str(&text).map_err(|e| CatmapError::Parse {
-        path: path.to_owned(),
-        line: e.line(),
-        reason: e.to_string(),
-    })?;
-    Ok(scene.objects)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::metrics::ground_truth::{ClassLabel, UNKNOWN_CLASS};
     use crate::synth::primitives::cuboid;
 
     fn write(path: &Path, mesh: &TriangleMesh) {
@@ -189,7 +93,7 @@ mod tests {
     }
 
     #[test]
-    fn flat_folders_without_scene_json_have_unknown_classes() {
+    fn flat_folders_are_scored_with_missing_predictions_reported() {
         let (gt, pred) = (
             tempfile::tempdir().expect("temp dir"),
             tempfile::tempdir().expect("temp dir"),
@@ -197,7 +101,6 @@ mod tests {
         let cube = cuboid([0.0; 3], [0.3; 3]);
         write(&gt.path().join("obj_2.ply"), &cube);
         write(&gt.path().join("obj_10.ply"), &cube);
-        std::fs::write(gt.path().join("notes.txt"), "ignored").expect("write");
         write(&pred.path().join("meshes/obj_10.ply"), &cube);
         let report = evaluate_dirs(pred.path(), gt.path(), Crop::Paper, 1).expect("valid folders");
         let ids: Vec<u32> = report.objects.iter().map(|o| o.id.0).collect();
@@ -219,38 +122,38 @@ mod tests {
     }
 
     #[test]
-    fn scene_json_names_the_classes() {
+    fn known_classes_group_the_report() {
         let gt = tempfile::tempdir().expect("temp dir");
-        write(&gt.path().join("gt_meshes/obj_1.ply"), &cuboid([0.0; 3], [0.2; 3]));
-        write(&gt.path().join("gt_meshes/obj_2.ply"), &cuboid([0.0; 3], [0.2; 3]));
-        let scene =
-            r#"{"seed": 0, "objects": [{"id": 1, "class": 20, "class_name": "my chair"}, {"id": 2, "class": 80}]}"#;
-        std::fs::write(gt.path().join("scene.json"), scene).expect("write");
-        let entries = list_ground_truth(gt.path()).expect("valid folder");
-        assert_eq!(entries[0].class_name, "my chair", "class_name wins");
-        assert_eq!(
-            (entries[1].class, entries[1].class_name.as_str()),
-            (Some(ClassId(80)), "table"),
-            "else the Replica name"
-        );
+        let cube = cuboid([0.0; 3], [0.3; 3]);
+        write(&gt.path().join("gt_meshes/obj_1.ply"), &cube);
+        write(&gt.path().join("gt_meshes/obj_2.ply"), &cube);
+        std::fs::write(gt.path().join("scene.json"), r#"{"objects": [{"name": "x"}]}"#).expect("write");
+        let label = ClassLabel {
+            class: crate::ClassId(20),
+            name: "chair".to_owned(),
+        };
+        let known = ObjectClasses::from([(ObjectId(1), label.clone()), (ObjectId(2), label)]);
+        let truth = GroundTruth::load(gt.path(), &known).expect("the meshes suffice");
+        let report = evaluate_ground_truth(gt.path(), &truth, &EvalSettings::default()).expect("valid folders");
+        assert_eq!(report.classes.keys().collect::<Vec<_>>(), ["chair"]);
+        assert_eq!(report.classes["chair"].objects, 2);
     }
 
     #[test]
-    fn missing_folders_and_empty_ground_truth_are_named_in_errors() {
+    fn an_unreadable_ground_truth_mesh_is_named_in_the_error() {
+        let gt = tempfile::tempdir().expect("temp dir");
+        write(&gt.path().join("gt_meshes/obj_1.ply"), &cuboid([0.0; 3], [0.3; 3]));
+        std::fs::write(gt.path().join("gt_meshes/obj_2.ply"), b"ply\nnot a mesh").expect("write");
+        let err = evaluate_dirs(gt.path(), gt.path(), Crop::Paper, 0).expect_err("obj_2 is garbage");
+        assert!(err.to_string().contains("obj_2.ply"), "{err}");
+    }
+
+    #[test]
+    fn a_missing_prediction_folder_is_named_in_the_error() {
         let dir = tempfile::tempdir().expect("temp dir");
+        write(&dir.path().join("obj_1.ply"), &cuboid([0.0; 3], [0.3; 3]));
         let missing = dir.path().join("nope");
         let err = evaluate_dirs(&missing, dir.path(), Crop::Paper, 0).expect_err("no prediction folder");
         assert!(err.to_string().contains("nope"), "{err}");
-        let err = evaluate_dirs(dir.path(), &missing, Crop::Paper, 0).expect_err("no ground-truth folder");
-        assert!(err.to_string().contains("nope"), "{err}");
-        let err = evaluate_dirs(dir.path(), dir.path(), Crop::Paper, 0).expect_err("no meshes");
-        assert!(err.to_string().contains("obj_{id}.ply"), "{err}");
-    }
-
-    #[test]
-    fn mesh_file_names_parse_only_object_ids() {
-        assert_eq!(parse_mesh_file_name("obj_12.ply"), Some(ObjectId(12)));
-        assert_eq!(parse_mesh_file_name("obj_x.ply"), None);
-        assert_eq!(parse_mesh_file_name("obj_3.ply.tmp"), None);
     }
 }

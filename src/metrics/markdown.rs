@@ -17,8 +17,11 @@ pub fn render_markdown(report: &EvaluationReport) -> String {
         "# Reconstruction metrics\n\ncrop: {}, {} samples per mesh, seed {}; {} objects, {} missing\n\n",
         s.crop, s.samples_per_mesh, s.seed, report.mean.objects, report.mean.missing
     );
+    // The observed share of each object's surface, when the ground truth states it.
+    let seen = report.objects.iter().any(|o| o.observed_surface_fraction.is_some());
+    let (seen_header, seen_align) = if seen { (" seen [%] |", "---:|") } else { ("", "") };
     out.push_str(&format!(
-        "## Objects\n\n| object | class | {SCORE_HEADER} |\n|---:|---|{SCORE_ALIGN}|\n"
+        "## Objects\n\n| object | class |{seen_header} {SCORE_HEADER} |\n|---:|---|{seen_align}{SCORE_ALIGN}|\n"
     ));
     for o in &report.objects {
         let v = &o.scores;
@@ -31,7 +34,12 @@ pub fn render_markdown(report: &EvaluationReport) -> String {
                 v.completion_ratio_1cm_pct,
             ),
         };
-        let _ = writeln!(out, "| {} | {} | {row} |", o.id, o.class_name);
+        let seen_cell = match (seen, o.observed_surface_fraction) {
+            (false, _) => String::new(),
+            (true, None) => " – |".to_owned(),
+            (true, Some(f)) => format!(" {:.1} |", 100.0 * f),
+        };
+        let _ = writeln!(out, "| {} | {} |{seen_cell} {row} |", o.id, o.class_name);
     }
     out.push_str(&format!(
         "\n## Classes\n\n| class | objects | missing | {SCORE_HEADER} |\n|---|---:|---:|{SCORE_ALIGN}|\n"
@@ -89,12 +97,14 @@ mod tests {
                 id: ObjectId(4),
                 class: None,
                 class_name: "chair".into(),
+                observed_surface_fraction: None,
                 scores,
             },
             ObjectMetrics {
                 id: ObjectId(7),
                 class: None,
                 class_name: "chair".into(),
+                observed_surface_fraction: None,
                 scores: ObjectScores::missing(),
             },
         ];
@@ -115,5 +125,23 @@ mod tests {
             text.contains("| 2 | 1 | 1.23 | 2.50 | 48.0 | 20.0 |"),
             "mean row:\n{text}"
         );
+    }
+
+    #[test]
+    fn the_observed_fraction_gets_a_column_when_the_ground_truth_states_it() {
+        let object = |id, fraction| ObjectMetrics {
+            id: ObjectId(id),
+            class: None,
+            class_name: "chair".into(),
+            observed_surface_fraction: fraction,
+            scores: ObjectScores::missing(),
+        };
+        let text = render_markdown(&EvaluationReport::new(
+            EvalSettings::default(),
+            vec![object(1, Some(0.756)), object(2, None)],
+        ));
+        assert!(text.contains("| object | class | seen [%] | Acc."), "header:\n{text}");
+        assert!(text.contains("| 1 | chair | 75.6 | missing |"), "stated:\n{text}");
+        assert!(text.contains("| 2 | chair | – | missing |"), "not stated:\n{text}");
     }
 }

@@ -10,18 +10,21 @@
 //! [`Crop::Vmap`] instead crops both sample sets to the box enlarged by 1/0.9. Objects without
 //! prediction are reported as missing. [`EvaluationReport`] aggregates per class and over
 //! objects, serialises with serde, and renders as Markdown ([`render_markdown`]);
-//! [`evaluate_dirs`] evaluates folders of `obj_{id}.ply` meshes.
+//! [`evaluate_ground_truth`] evaluates a folder of `obj_{id}.ply` meshes against a
+//! [`GroundTruth`] (its meshes and the objects' classes).
 
 pub mod compare;
 pub mod crop;
 pub mod eval_dirs;
+pub mod ground_truth;
 pub mod markdown;
 pub mod object_scores;
 pub mod report;
 
 pub use crop::Crop;
-pub use eval_dirs::{
-    GroundTruthEntry, evaluate_dirs, evaluate_dirs_with, list_ground_truth, mesh_file_name, prediction_path,
+pub use eval_dirs::{evaluate_dirs, evaluate_ground_truth, prediction_path};
+pub use ground_truth::{
+    ClassLabel, GroundTruth, GroundTruthEntry, ObjectClasses, SceneFile, UNKNOWN_CLASS, mesh_file_name,
 };
 pub use markdown::render_markdown;
 pub use object_scores::{ObjectScores, PredictionStatus, SAMPLES_PER_MESH, score_object};

@@ -39,6 +39,10 @@ pub struct ObjectMetrics {
     pub class: Option<ClassId>,
     /// Class name used to group objects (`unknown` when not known).
     pub class_name: String,
+    /// Share of the object's surface some frame saw, when the ground truth says (catmap's own
+    /// `scene.json`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub observed_surface_fraction: Option<f32>,
     /// The scores.
     pub scores: ObjectScores,
 }
@@ -128,6 +132,7 @@ mod tests {
             id: ObjectId(id),
             class: None,
             class_name: class_name.to_owned(),
+            observed_surface_fraction: None,
             scores,
         }
     }

@@ -1,9 +1,10 @@
 //! `catmap eval`: score predicted object meshes against ground-truth meshes (METHOD.md §6).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, bail};
-use catmap::metrics::{Crop, evaluate_dirs, render_markdown};
+use catmap::metrics::{Crop, EvalSettings, ObjectClasses, evaluate_ground_truth, render_markdown};
+use catmap_systems::summary::read_object_classes;
 
 /// Arguments of `catmap eval`.
 #[derive(clap::Args, Debug)]
@@ -11,9 +12,14 @@ pub struct EvalArgs {
     /// Folder of predicted meshes `obj_{id}.ply` (or `meshes/obj_{id}.ply`).
     #[arg(long)]
     pub pred: PathBuf,
-    /// Ground-truth folder: `gt_meshes/obj_{id}.ply` (else `obj_{id}.ply`) and optional `scene.json`.
+    /// Ground-truth folder: `gt_meshes/obj_{id}.ply` (else `obj_{id}.ply`); a `scene.json` is
+    /// used only when `catmap synth` wrote it.
     #[arg(long)]
     pub gt: PathBuf,
+    /// The objects' classes: a catmap run's `summary.json`, or its run folder. Default: the
+    /// `summary.json` beside or above `--pred` when there is one.
+    #[arg(long, value_name = "SUMMARY")]
+    pub classes: Option<PathBuf>,
     /// Crop protocol: the paper's (accuracy only, tight box) or vMAP's (both sets, box / 0.9).
     #[arg(long, value_enum, default_value_t = CropArg::Paper)]
     pub crop: CropArg,
@@ -51,7 +57,17 @@ pub fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     if !args.gt.is_dir() {
         bail!("ground-truth folder {} does not exist", args.gt.display());
     }
-    let report = evaluate_dirs(&args.pred, &args.gt, args.crop.into(), args.seed)
+    let classes = match &args.classes {
+        Some(path) => read_object_classes(path).context("--classes")?,
+        None => classes_beside(&args.pred),
+    };
+    let ground_truth = crate::run_outputs::load_ground_truth(&args.gt, &classes)?;
+    let settings = EvalSettings {
+        crop: args.crop.into(),
+        seed: args.seed,
+        ..EvalSettings::default()
+    };
+    let report = evaluate_ground_truth(&args.pred, &ground_truth, &settings)
         .with_context(|| format!("cannot evaluate {} against {}", args.pred.display(), args.gt.display()))?;
     if let Some(path) = &args.json {
         let mut text = serde_json::to_string_pretty(&report).context("cannot serialise the report")?;
@@ -66,4 +82,26 @@ pub fn eval(args: &EvalArgs) -> anyhow::Result<()> {
         "evaluation done"
     );
     Ok(())
+}
+
+/// The classes of the catmap run that wrote `pred` (`pred/summary.json`, or `../summary.json`
+/// of `OUT/meshes`), when there is one; none (with a warning) when it is unreadable.
+fn classes_beside(pred: &Path) -> ObjectClasses {
+    let candidates = [
+        Some(pred.join("summary.json")),
+        pred.parent().map(|p| p.join("summary.json")),
+    ];
+    let Some(summary) = candidates.into_iter().flatten().find(|p| p.is_file()) else {
+        return ObjectClasses::new();
+    };
+    match read_object_classes(&summary) {
+        Ok(classes) => {
+            tracing::info!(summary = %summary.display(), "object classes from the run's summary");
+            classes
+        }
+        Err(e) => {
+            tracing::warn!("{e:#}; classes from the ground truth only (--classes names another summary)");
+            ObjectClasses::new()
+        }
+    }
 }

@@ -11,6 +11,7 @@ mod cli_eval;
 mod cli_run;
 mod cli_synth;
 mod progress;
+mod run_outputs;
 mod run_phases;
 mod run_plan;
 

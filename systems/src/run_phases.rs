@@ -13,7 +13,6 @@ use catmap::config::CheckpointConfig;
 use catmap::dataset::FrameSource;
 use catmap::stream::{FrameStream, stream_positions};
 use catmap_systems::Mapper;
-use catmap_systems::summary::RunSummary;
 
 use crate::progress::bar;
 use crate::run_plan::RunPlan;
@@ -97,63 +96,8 @@ pub fn drive(mut mapper: Mapper, plan: RunPlan, source: Arc<dyn FrameSource>, st
             "category fields trained"
         );
     }
-    write_outputs(mapper, &plan, source.name(), started)?;
+    crate::run_outputs::write_outputs(mapper, &plan, source.name(), started)?;
     checkpoints.remove_after_success();
-    Ok(())
-}
-
-/// Writes categories.json, the meshes, metrics.json and summary.json; completes the recording.
-fn write_outputs(mut mapper: Mapper, plan: &RunPlan, dataset_name: String, started: Instant) -> anyhow::Result<()> {
-    let config = mapper.config().clone();
-    let mut extra_seconds = std::collections::BTreeMap::new();
-    if config.fields.enabled {
-        let path = plan.out.join("categories.json");
-        catmap_systems::categories_report::write_category_records(&mapper.category_records(), &path)?;
-        tracing::info!(path = %path.display(), "categories written");
-        let meshes = mapper.extract_final_meshes();
-        let dir = plan.out.join("meshes");
-        let written = meshes.write_dir(&dir)?;
-        tracing::info!(files = written, dir = %dir.display(), "meshes written");
-        if plan.dataset.join("gt_meshes").is_dir() {
-            let started = Instant::now();
-            evaluate_run(&dir, &plan.dataset, config.seed, &plan.out.join("metrics.json"))?;
-            extra_seconds.insert("eval".to_owned(), started.elapsed().as_secs_f64());
-        }
-    }
-    let mut stage_seconds = mapper.stage_seconds();
-    if let Some(stats) = mapper.stream_stats() {
-        stage_seconds.insert("read (reader thread)".to_owned(), stats.decode_time.as_secs_f64());
-    }
-    stage_seconds.extend(extra_seconds);
-    let training_steps = mapper.training_steps();
-    let map = mapper.finish();
-    plan.complete_recording()?;
-    let total = plan.seconds_before + started.elapsed().as_secs_f64();
-    let mut summary = RunSummary::new(dataset_name, &map, stage_seconds, total);
-    let protocol = if config.fields.offline {
-        " (offline)"
-    } else {
-        " (online)"
-    };
-    summary.mode = format!("{:?}{protocol}", plan.mode).to_lowercase();
-    summary.training_steps = training_steps;
-    let summary_path = plan.out.join("summary.json");
-    summary.write_json(&summary_path)?;
-    crate::print_stdout(&summary.table());
-    tracing::info!(summary = %summary_path.display(), "done");
-    Ok(())
-}
-
-/// Scores the written meshes against the dataset's ground truth: `metrics.json` and a table.
-fn evaluate_run(meshes: &Path, dataset: &Path, seed: u64, json: &Path) -> anyhow::Result<()> {
-    let report = catmap::metrics::evaluate_dirs(meshes, dataset, catmap::metrics::Crop::Paper, seed)
-        .with_context(|| format!("cannot evaluate {} against {}", meshes.display(), dataset.display()))?;
-    let mut text = serde_json::to_string_pretty(&report).context("cannot serialise the metrics")?;
-    text.push('\n');
-    catmap::atomic_file::write_atomic(json, text.as_bytes())
-        .with_context(|| format!("cannot write {}", json.display()))?;
-    crate::print_stdout(&catmap::metrics::render_markdown(&report));
-    tracing::info!(metrics = %json.display(), "evaluation written");
     Ok(())
 }
 

@@ -106,13 +106,17 @@ impl RunPlan {
         }
     }
 
-    /// Renames the finished recording file into place (after the recording was flushed).
-    pub fn complete_recording(&self) -> anyhow::Result<()> {
-        if let Recording::Save(path) = &self.recording {
-            let temp = catmap::atomic_file::temp_path_for(path);
-            std::fs::rename(&temp, path)
-                .with_context(|| format!("cannot move {} to {}", temp.display(), path.display()))?;
+    /// Renames the finished recording file into place (after the recording was flushed);
+    /// returns where the recording went.
+    pub fn complete_recording(&self) -> anyhow::Result<String> {
+        match &self.recording {
+            Recording::Save(path) => {
+                let temp = catmap::atomic_file::temp_path_for(path);
+                std::fs::rename(&temp, path)
+                    .with_context(|| format!("cannot move {} to {}", temp.display(), path.display()))?;
+                Ok(path.display().to_string())
+            }
+            Recording::Connect(url) => Ok(url.clone()),
         }
-        Ok(())
     }
 }

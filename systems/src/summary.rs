@@ -5,13 +5,16 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
+use anyhow::Context as _;
 use catmap::classes::replica_name;
-use serde::Serialize;
+use catmap::metrics::{ClassLabel, ObjectClasses};
+use catmap::{ClassId, ObjectId};
+use serde::{Deserialize, Serialize};
 
 use crate::snapshot::MapSnapshot;
 
 /// One row per object.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ObjectRow {
     /// Dataset instance id.
     pub id: u32,
@@ -52,6 +55,63 @@ pub struct RunSummary {
     pub frames_per_second: f64,
     /// Largest resident memory of the process so far, MiB (Linux; absent elsewhere).
     pub peak_resident_mib: Option<f64>,
+    /// What became of each step after the map was made (`recording`: the recording's
+    /// completion, `eval`: the evaluation). A failure here never fails the run.
+    pub finishing_steps: BTreeMap<String, StepOutcome>,
+}
+
+/// What became of one step after the map was made.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "outcome", rename_all = "snake_case")]
+pub enum StepOutcome {
+    /// Done: what it wrote (a file, or the viewer the recording went to).
+    Done {
+        /// The output.
+        output: String,
+    },
+    /// Not run.
+    Skipped {
+        /// Why not.
+        reason: String,
+    },
+    /// Failed; the run went on.
+    Failed {
+        /// The error, naming the file at fault.
+        reason: String,
+    },
+}
+
+/// The part of `summary.json` that names the objects' classes.
+#[derive(Deserialize)]
+struct SummaryObjects {
+    objects: Vec<ObjectRow>,
+}
+
+/// The objects' classes recorded in a run's `summary.json`, or in `summary.json` inside the run
+/// folder `path`.
+pub fn read_object_classes(path: &Path) -> anyhow::Result<ObjectClasses> {
+    let file = if path.is_dir() {
+        path.join("summary.json")
+    } else {
+        path.to_owned()
+    };
+    let text = std::fs::read_to_string(&file).with_context(|| format!("cannot read {}", file.display()))?;
+    let summary: SummaryObjects = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a catmap run summary (no objects with classes)", file.display()))?;
+    Ok(object_classes(&summary.objects))
+}
+
+/// Object id → class label of `rows`.
+fn object_classes(rows: &[ObjectRow]) -> ObjectClasses {
+    rows.iter()
+        .map(|row| {
+            let label = ClassLabel {
+                class: ClassId(row.class),
+                name: row.class_name.clone(),
+            };
+            (ObjectId(row.id), label)
+        })
+        .collect()
 }
 
 fn class_name(class: catmap::ClassId) -> String {
@@ -89,7 +149,13 @@ impl RunSummary {
             total_seconds,
             frames_per_second: map.frames_ingested as f64 / total_seconds.max(1e-9),
             peak_resident_mib: catmap::process_memory::peak_resident_mib(),
+            finishing_steps: BTreeMap::new(),
         }
+    }
+
+    /// Each object's class as the map voted it from the semantic masks.
+    pub fn object_classes(&self) -> ObjectClasses {
+        object_classes(&self.objects)
     }
 
     /// Writes the summary as pretty JSON, atomically.
@@ -126,6 +192,82 @@ impl RunSummary {
         if let Some(peak) = self.peak_resident_mib {
             let _ = writeln!(out, "\npeak memory: {peak:.0} MiB resident");
         }
+        for (step, outcome) in &self.finishing_steps {
+            if let StepOutcome::Failed { reason } = outcome {
+                let _ = writeln!(out, "{step} failed (the map is complete): {reason}");
+            }
+        }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn summary_with(rows: Vec<ObjectRow>) -> RunSummary {
+        let map = crate::snapshot::MapSnapshot {
+            frames_ingested: 3,
+            frames_skipped: 0,
+            objects: Vec::new(),
+            background: None,
+            categories: Vec::new(),
+        };
+        let mut summary = RunSummary::new("scene".to_owned(), &map, BTreeMap::new(), 1.0);
+        summary.objects = rows;
+        summary
+    }
+
+    fn row(id: u32, class: u32) -> ObjectRow {
+        ObjectRow {
+            id,
+            class,
+            class_name: class_name(ClassId(class)),
+            visible_frames: 1,
+            cloud_points: 10,
+            box_extents_m: None,
+        }
+    }
+
+    #[test]
+    fn a_written_summary_names_each_objects_class_from_its_file_or_its_folder() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let mut summary = summary_with(vec![row(3, 20), row(5, 7)]);
+        summary.finishing_steps.insert(
+            "eval".to_owned(),
+            StepOutcome::Failed {
+                reason: "gt/obj_3.ply: bad".to_owned(),
+            },
+        );
+        let path = dir.path().join("summary.json");
+        summary.write_json(&path).expect("written");
+        for source in [path.as_path(), dir.path()] {
+            let classes = read_object_classes(source).expect("a catmap summary");
+            assert_eq!(classes, summary.object_classes(), "read back from {}", source.display());
+        }
+        let classes = summary.object_classes();
+        assert_eq!(classes[&ObjectId(3)].name, "chair");
+        assert_eq!(classes[&ObjectId(5)].name, "class 7", "a class without a known name");
+        let text = std::fs::read_to_string(&path).expect("readable");
+        assert!(
+            text.contains(r#""outcome": "failed""#) && text.contains("obj_3.ply"),
+            "the failure is recorded: {text}"
+        );
+        assert!(
+            summary
+                .table()
+                .contains("eval failed (the map is complete): gt/obj_3.ply: bad")
+        );
+    }
+
+    #[test]
+    fn a_file_that_is_not_a_summary_is_named_in_the_error() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("metrics.json");
+        std::fs::write(&path, r#"{"mean": {}}"#).expect("write");
+        let err = read_object_classes(&path).expect_err("no objects");
+        assert!(format!("{err:#}").contains("metrics.json"), "{err:#}");
+        let err = read_object_classes(&dir.path().join("nope")).expect_err("no file");
+        assert!(format!("{err:#}").contains("nope"), "{err:#}");
     }
 }
