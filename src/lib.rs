@@ -38,4 +38,5 @@ pub mod registration;
 pub mod rng;
 pub mod stream;
 pub mod synth;
+pub mod training;
 pub mod uncertainty;

@@ -101,30 +101,52 @@ impl FieldBatch {
     /// One training step on `batch` (one [`super::RaySamples`] per field, in field order):
     /// returns each field's losses before the update.
     pub fn train_step(&mut self, batch: &SampleBatch) -> Result<Vec<FieldLosses>> {
-        let losses = self.compute_gradients(batch)?;
+        let all: Vec<usize> = (0..self.fields.len()).collect();
+        self.train_step_of(&all, batch)
+    }
+
+    /// One training step of the fields `active` only (ascending indices; `batch` holds one
+    /// [`super::RaySamples`] per active field, in that order): returns their losses before the
+    /// update. The other fields get no forward, backward or AdamW update — not even weight
+    /// decay — so their weights and optimiser moments stay bit for bit as they were.
+    pub fn train_step_of(&mut self, active: &[usize], batch: &SampleBatch) -> Result<Vec<FieldLosses>> {
+        let losses = self.compute_gradients(active, batch)?;
         let optim = self.optim;
-        self.fields
-            .par_iter_mut()
-            .zip(self.grads.par_iter())
-            .for_each(|(field, grad)| {
-                let (params, state) = field.params_and_state_mut();
-                state.update(&optim, params, grad);
-            });
+        let grads = &self.grads;
+        let mut updates: Vec<(&mut OccupancyField, &Vec<f32>)> = self
+            .fields
+            .iter_mut()
+            .enumerate()
+            .filter_map(|(i, field)| active.binary_search(&i).ok().map(|k| (field, &grads[k])))
+            .collect();
+        updates.par_iter_mut().for_each(|(field, grad)| {
+            let (params, state) = field.params_and_state_mut();
+            state.update(&optim, params, grad);
+        });
         Ok(losses)
     }
 
     /// Losses and canonical gradients (flat, in each field's layout order) without updating.
     pub fn loss_and_gradients(&mut self, batch: &SampleBatch) -> Result<(Vec<FieldLosses>, Vec<Vec<f32>>)> {
-        let losses = self.compute_gradients(batch)?;
+        let all: Vec<usize> = (0..self.fields.len()).collect();
+        let losses = self.compute_gradients(&all, batch)?;
         Ok((losses, self.grads[..self.fields.len()].to_vec()))
     }
 
-    fn compute_gradients(&mut self, batch: &SampleBatch) -> Result<Vec<FieldLosses>> {
-        if batch.fields.len() != self.fields.len() {
+    /// Losses and gradients of the fields `active` (ascending), whose samples `batch` holds in
+    /// that order; `self.grads[k]` is the gradient of field `active[k]`.
+    fn compute_gradients(&mut self, active: &[usize], batch: &SampleBatch) -> Result<Vec<FieldLosses>> {
+        if batch.fields.len() != active.len() {
             return Err(CatmapError::Degenerate(format!(
-                "{} fields but samples for {}",
-                self.fields.len(),
+                "{} fields to train but samples for {}",
+                active.len(),
                 batch.fields.len()
+            )));
+        }
+        if active.windows(2).any(|w| w[0] >= w[1]) || active.last().is_some_and(|&i| i >= self.fields.len()) {
+            return Err(CatmapError::Degenerate(format!(
+                "field indices {active:?} must ascend and lie below {}",
+                self.fields.len()
             )));
         }
         for rays in &batch.fields {
@@ -132,15 +154,16 @@ impl FieldBatch {
         }
         let backend = self.backend;
         let nets = &self.nets;
+        let fields: Vec<&OccupancyField> = active.iter().map(|&i| &self.fields[i]).collect();
         let net_of = |f: &OccupancyField| nets.iter().find(|n| n.hidden == f.hidden());
-        let nets_of: Vec<&OccupancyNet> = self.fields.iter().filter_map(net_of).collect();
-        debug_assert_eq!(nets_of.len(), self.fields.len(), "every hidden width has a net");
+        let nets_of: Vec<&OccupancyNet> = fields.iter().filter_map(|f| net_of(f)).collect();
+        debug_assert_eq!(nets_of.len(), fields.len(), "every hidden width has a net");
 
-        // Pack every field's weights.
-        self.packed.resize_with(self.fields.len(), Vec::new);
+        // Pack every active field's weights.
+        self.packed.resize_with(fields.len().max(self.packed.len()), Vec::new);
         self.packed
             .par_iter_mut()
-            .zip(&self.fields)
+            .zip(&fields)
             .zip(&nets_of)
             .for_each(|((packed, field), net)| {
                 packed.resize(net.packed_len, 0.0);
@@ -152,12 +175,12 @@ impl FieldBatch {
         let cost: Vec<usize> = batch
             .fields
             .iter()
-            .zip(&self.fields)
+            .zip(&fields)
             .map(|(r, f)| r.samples_per_ray * f.params().len())
             .collect();
         let tasks = plan_tasks(&units, &cost, TASK_WORK);
         let norms: Vec<LossNorm> = batch.fields.iter().map(LossNorm::of).collect();
-        let (fields, packed) = (&self.fields, &self.packed);
+        let packed = &self.packed;
         let task_losses = self.pool.run(
             &tasks,
             |f| nets_of[f].grad_len,
@@ -187,9 +210,9 @@ impl FieldBatch {
         );
 
         // Deterministic per-field reduction into canonical gradients.
-        let by_field = tasks_by_field(&tasks, self.fields.len());
+        let by_field = tasks_by_field(&tasks, fields.len());
         let task_grads = self.pool.grads();
-        self.grads.resize_with(self.fields.len(), Vec::new);
+        self.grads.resize_with(fields.len().max(self.grads.len()), Vec::new);
         let per_field: Vec<FieldLosses> = by_field
             .iter()
             .map(|ids| {
@@ -201,7 +224,7 @@ impl FieldBatch {
             .par_iter_mut()
             .zip(&by_field)
             .zip(&nets_of)
-            .zip(&self.fields)
+            .zip(&fields)
             .for_each(|(((grad, ids), net), field)| {
                 grad.clear();
                 grad.resize(field.params().len(), 0.0);
@@ -210,5 +233,86 @@ impl FieldBatch {
                 }
             });
         Ok(per_field)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::RaySamples;
+    use crate::rng::{RngStream, seeded_rng};
+    use crate::{ObjectId, field::OBJECT_HIDDEN};
+
+    fn batch_of(n: usize) -> FieldBatch {
+        let mut batch = FieldBatch::new(AdamWConfig::default());
+        for i in 0..n {
+            let mut rng = seeded_rng(3, RngStream::ObjectField(ObjectId(i as u32)));
+            batch.push(OccupancyField::new(OBJECT_HIDDEN, 2.0, &mut rng));
+        }
+        batch
+    }
+
+    fn rays(seed: u64, n: usize) -> Vec<RaySamples> {
+        let mut rng = seeded_rng(seed, RngStream::Background);
+        (0..n).map(|_| RaySamples::random(&mut rng, 24, 10, 0.5, 0.1)).collect()
+    }
+
+    #[test]
+    fn a_field_outside_the_step_keeps_its_weights_and_moments_bit_for_bit() {
+        let mut batch = batch_of(3);
+        let before = batch.field(1).expect("three fields").clone();
+        for step in 0..3 {
+            let samples = rays(step, 2);
+            batch
+                .train_step_of(&[0, 2], &SampleBatch { fields: samples })
+                .expect("valid step");
+        }
+        assert_eq!(
+            batch.field(1),
+            Some(&before),
+            "field 1 took no step: no update, no weight decay"
+        );
+        assert_eq!(batch.field(0).expect("field 0").optimiser_state().step, 3);
+        assert_ne!(batch.field(2).expect("field 2").params(), before.params());
+    }
+
+    #[test]
+    fn a_subset_step_equals_the_same_fields_trained_alone() {
+        let (mut both, mut alone) = (batch_of(3), batch_of(3));
+        let samples = rays(9, 3);
+        both.train_step(&SampleBatch {
+            fields: samples.clone(),
+        })
+        .expect("valid step");
+        let losses = alone
+            .train_step_of(
+                &[2],
+                &SampleBatch {
+                    fields: vec![samples[2].clone()],
+                },
+            )
+            .expect("valid step");
+        assert_eq!(losses.len(), 1, "one loss per trained field");
+        assert_eq!(
+            alone.field(2),
+            both.field(2),
+            "fields train independently: the subset step is the full step's restriction"
+        );
+    }
+
+    #[test]
+    fn indices_that_do_not_ascend_or_do_not_exist_are_refused() {
+        let mut batch = batch_of(2);
+        for active in [vec![1, 0], vec![0, 2], vec![1, 1]] {
+            let samples = SampleBatch {
+                fields: rays(1, active.len()),
+            };
+            let err = batch.train_step_of(&active, &samples).expect_err("bad indices");
+            assert!(err.to_string().contains("must ascend"), "{active:?}: {err}");
+        }
+        let err = batch
+            .train_step_of(&[0, 1], &SampleBatch { fields: rays(1, 1) })
+            .expect_err("one sample set for two fields");
+        assert!(err.to_string().contains("samples for 1"), "{err}");
     }
 }

@@ -1,0 +1,11 @@
+//! Which fields train, and when (issue 17): the [`StepScheduler`] gives the steps of each tick
+//! to the fields that gain from them and none to those that have converged or been replaced by
+//! a category field; [`LossWindow`] tells when a loss has stopped falling.
+
+pub mod plateau;
+pub mod scheduler;
+
+pub use plateau::{LossWindow, PlateauConfig};
+pub use scheduler::{
+    FieldFacts, FieldKey, FieldProgress, FieldRole, FieldState, SchedulePolicy, Sighting, StepScheduler,
+};
