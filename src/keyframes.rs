@@ -46,6 +46,13 @@ pub enum Admission {
     },
 }
 
+impl Admission {
+    /// Whether the offered frame became a keyframe (rather than the live slot's newest view).
+    pub fn is_keyframe(&self) -> bool {
+        matches!(self, Self::Appended | Self::Overwrote { keyframe: true, .. })
+    }
+}
+
 /// One slot: the frame index and what the caller keeps of that frame.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct KeyframeSlot<T> {

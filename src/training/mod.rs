@@ -2,9 +2,11 @@
 //! to the fields that gain from them and none to those that have converged or been replaced by
 //! a category field; [`LossWindow`] tells when a loss has stopped falling.
 
+pub mod config;
 pub mod plateau;
 pub mod scheduler;
 
+pub use config::ScheduleConfig;
 pub use plateau::{LossWindow, PlateauConfig};
 pub use scheduler::{
     FieldFacts, FieldKey, FieldProgress, FieldRole, FieldState, SchedulePolicy, Sighting, StepScheduler,
