@@ -108,6 +108,8 @@ fn final_meshes(offline_steps: u64) -> MapMeshes {
     let scene = SyntheticScene::generate(SEED, Preset::Small).expect("scene");
     let mut config = cheap_config(1);
     config.fields.offline = true;
+    // The background field is off by default; these meshes include it.
+    config.fields.background_every = 10;
     let mut mapper = Mapper::new(config).expect("config");
     stream_scene(&mut mapper, &scene);
     mapper.train(offline_steps, 100, |_| {});

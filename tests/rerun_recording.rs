@@ -39,6 +39,8 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         };
         // Cheap training: enough to log losses and a preview mesh or two.
         config.fields.steps_per_frame = 1;
+        // The background field is off by default; its loss is logged when it is on.
+        config.fields.background_every = 10;
         config.meshes.preview_every_frames = 10;
         config.meshes.preview_voxel_m = 0.05;
         // A short category phase: chairs share one field (with these weak fields one chair may
@@ -46,6 +48,8 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         config.categories.min_field_steps = 1;
         config.category_fields.enabled = true;
         config.category_fields.iterations = 20;
+        // The fast schedule trains the category fields after the stream, with the objects.
+        config.schedule.max_steps_after_stream = 100;
         let mut mapper = Mapper::new(config).expect("config");
         mapper.set_recording(rec);
         for position in 0..scene.len() {
@@ -54,6 +58,7 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         }
         mapper.end_stream();
         mapper.step();
+        mapper.train_after_stream(|_, _| {});
         assert_eq!(mapper.train_categories(|_, _| {}), 1, "one category field");
         let map = mapper.finish();
         assert!(map.objects.len() >= 3, "the small scene maps several objects");

@@ -2,6 +2,17 @@
 
 use serde::{Deserialize, Serialize};
 
+/// How many rays a category field draws per step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CategoryRayBudget {
+    /// The reference's: `rays_per_object · objects / categories` rays per category field, where
+    /// every object is in one category (a category field, or on its own), shared by its members.
+    PerCategory,
+    /// `rays_per_object` rays for every member (a field's cost grows with its members).
+    PerMember,
+}
+
 /// Settings of the category-level fields. A config file lists only what it changes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -10,13 +21,15 @@ pub struct CategoryFieldConfig {
     /// `categories.enabled`; single-member subcategories keep their per-object fields. `catmap run`
     /// sets it from `--mode` (category, the default: on; instance: off).
     pub enabled: bool,
-    /// Steps of the category fields once the classes are registered (the paper's 10⁴).
+    /// Steps of the category fields once the classes are registered (the paper's 10⁴; the paper
+    /// schedule, and the offline protocol's cap).
     pub iterations: usize,
     /// Dimension of each member's shape code and of its texture code.
     pub code_dim: usize,
-    /// Rays per member per step (the paper's 120·objects/categories per category averages to
-    /// 120 per member when every object is in a category).
-    pub rays_per_member: usize,
+    /// Rays per object and step (vMAP's 120), the unit of the ray budget.
+    pub rays_per_object: usize,
+    /// How the rays of a step are shared out among the category fields.
+    pub ray_budget: CategoryRayBudget,
 }
 
 impl Default for CategoryFieldConfig {
@@ -25,7 +38,43 @@ impl Default for CategoryFieldConfig {
             enabled: false,
             iterations: 10_000,
             code_dim: 32,
-            rays_per_member: 120,
+            rays_per_object: 120,
+            ray_budget: CategoryRayBudget::PerCategory,
         }
+    }
+}
+
+impl CategoryFieldConfig {
+    /// Rays per member and step of a category field with `members` members, in a map of
+    /// `objects` objects forming `categories` categories (category fields plus objects on their
+    /// own); at least one ray per member.
+    pub fn rays_per_member(&self, members: usize, objects: usize, categories: usize) -> usize {
+        match self.ray_budget {
+            CategoryRayBudget::PerMember => self.rays_per_object,
+            CategoryRayBudget::PerCategory => {
+                let per_category = self.rays_per_object * objects / categories.max(1);
+                per_category.div_ceil(members.max(1)).max(1)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_reference_budget_shares_the_average_category_rays_among_members() {
+        let cfg = CategoryFieldConfig::default();
+        // 14 objects: two 4-member category fields and 6 objects on their own = 8 categories;
+        // 120 · 14 / 8 = 210 rays per category, 53 per member of a 4-member field.
+        assert_eq!(cfg.rays_per_member(4, 14, 8), 53);
+        assert_eq!(cfg.rays_per_member(2, 2, 1), 120, "every object in one field: 120 each");
+        let per_member = CategoryFieldConfig {
+            ray_budget: CategoryRayBudget::PerMember,
+            ..cfg
+        };
+        assert_eq!(per_member.rays_per_member(4, 14, 8), 120);
+        assert_eq!(cfg.rays_per_member(500, 1, 1), 1, "at least one ray per member");
     }
 }

@@ -9,11 +9,13 @@ mod category_fields;
 mod checkpoint;
 mod fields;
 mod meshes;
+mod phases;
 
-pub use category_fields::CategoryFieldConfig;
+pub use category_fields::{CategoryFieldConfig, CategoryRayBudget};
 pub use checkpoint::CheckpointConfig;
 pub use fields::FieldConfig;
 pub use meshes::MeshConfig;
+pub use phases::{AfterStream, FirstPhase};
 
 use crate::error::{CatmapError, Result};
 
@@ -33,6 +35,8 @@ pub struct MapperConfig {
     pub keyframes: KeyframeConfig,
     /// Per-object fields and their training.
     pub fields: FieldConfig,
+    /// Which fields train when (`catmap run --schedule`).
+    pub schedule: crate::training::ScheduleConfig,
     /// Mesh extraction.
     pub meshes: MeshConfig,
     /// Category-level registration: representatives, subcategories, NOCS frames.

@@ -45,6 +45,9 @@ mod tests {
                 ..ScheduleConfig::default()
             }
         );
-        assert!(toml::from_str::<ScheduleConfig>("polcy = 1").is_err(), "unknown keys are errors");
+        assert!(
+            toml::from_str::<ScheduleConfig>("polcy = 1").is_err(),
+            "unknown keys are errors"
+        );
     }
 }

@@ -9,5 +9,6 @@ pub mod scheduler;
 pub use config::ScheduleConfig;
 pub use plateau::{LossWindow, PlateauConfig};
 pub use scheduler::{
-    FieldFacts, FieldKey, FieldProgress, FieldRole, FieldState, SchedulePolicy, Sighting, StepScheduler,
+    FieldFacts, FieldKey, FieldProgress, FieldRole, FieldState, LastSeen, MeshSource, PhaseEnd, SchedulePolicy,
+    Sighting, StepScheduler, StreamPhase, category_field_facts, object_field_facts,
 };

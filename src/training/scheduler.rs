@@ -19,7 +19,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::plateau::{LossWindow, PlateauConfig};
-use crate::ids::ObjectId;
+use crate::ids::{FrameIndex, ObjectId};
 
 /// A field the scheduler plans for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -55,6 +55,73 @@ pub enum Sighting {
     NewKeyframe,
 }
 
+impl Sighting {
+    /// What the frames of this tick (`this_tick`) showed of an object last seen in frame
+    /// `last.frame` (`last.keyframe`: that frame became one of its keyframes).
+    pub fn of(last: Option<LastSeen>, this_tick: &[FrameIndex]) -> Self {
+        match last {
+            Some(seen) if this_tick.contains(&seen.frame) => {
+                if seen.keyframe {
+                    Self::NewKeyframe
+                } else {
+                    Self::Seen
+                }
+            }
+            _ => Self::Unseen,
+        }
+    }
+
+    /// The strongest of two sightings (a category field is seen when any member is).
+    pub fn max(self, other: Self) -> Self {
+        let rank = |s: Self| match s {
+            Self::Unseen => 0,
+            Self::Seen => 1,
+            Self::NewKeyframe => 2,
+        };
+        if rank(other) > rank(self) { other } else { self }
+    }
+}
+
+/// The latest frame an object was seen in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct LastSeen {
+    /// The frame.
+    pub frame: FrameIndex,
+    /// Whether it became one of the object's keyframes.
+    pub keyframe: bool,
+}
+
+/// Whose mesh an object's own field makes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MeshSource {
+    /// Its own field.
+    OwnField,
+    /// Its category field (it is a member of one).
+    CategoryField,
+}
+
+/// Whether frames are still streaming in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StreamPhase {
+    /// Frames arrive.
+    Streaming,
+    /// The stream has ended.
+    Ended,
+}
+
+impl FieldRole {
+    /// The role of an object's own field: learning while it makes the object's mesh; once a
+    /// category field makes it, supporting while the stream lasts (uncertainty and
+    /// re-registration read it) and frozen after.
+    pub fn of_object_field(mesh: MeshSource, phase: StreamPhase) -> Self {
+        match (mesh, phase) {
+            (MeshSource::OwnField, _) => Self::Learning,
+            (MeshSource::CategoryField, StreamPhase::Streaming) => Self::Supporting,
+            (MeshSource::CategoryField, StreamPhase::Ended) => Self::Frozen,
+        }
+    }
+}
+
 /// The facts about one field that a plan depends on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FieldFacts {
@@ -64,6 +131,63 @@ pub struct FieldFacts {
     pub role: FieldRole,
     /// What this tick's frames showed of it.
     pub sighting: Sighting,
+}
+
+/// The facts of object `id`'s own field.
+pub fn object_field_facts(
+    id: ObjectId,
+    last_seen: Option<LastSeen>,
+    mesh: MeshSource,
+    phase: StreamPhase,
+    this_tick: &[FrameIndex],
+) -> FieldFacts {
+    FieldFacts {
+        key: FieldKey::Object(id),
+        role: FieldRole::of_object_field(mesh, phase),
+        sighting: Sighting::of(last_seen, this_tick),
+    }
+}
+
+/// The facts of category field `id` (its creation number): always learning, seen as its most
+/// recently seen member.
+pub fn category_field_facts(
+    id: u32,
+    members_last_seen: impl IntoIterator<Item = Option<LastSeen>>,
+    this_tick: &[FrameIndex],
+) -> FieldFacts {
+    let sighting = members_last_seen
+        .into_iter()
+        .map(|last| Sighting::of(last, this_tick))
+        .fold(Sighting::Unseen, Sighting::max);
+    FieldFacts {
+        key: FieldKey::Category(id),
+        role: FieldRole::Learning,
+        sighting,
+    }
+}
+
+/// Why a training phase ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PhaseEnd {
+    /// No field gained from more steps (every one converged or frozen).
+    Converged,
+    /// The phase's step cap was reached.
+    StepCap,
+}
+
+impl PhaseEnd {
+    /// Whether a phase that has run `done` of at most `cap` steps ends, given how many fields
+    /// its latest plan trained (`planned`; none = nothing gains from more steps).
+    pub fn of(done: u64, cap: u64, planned: usize) -> Option<Self> {
+        if planned == 0 {
+            Some(Self::Converged)
+        } else if done >= cap {
+            Some(Self::StepCap)
+        } else {
+            None
+        }
+    }
 }
 
 /// How steps are given out.
@@ -141,6 +265,26 @@ impl StepScheduler {
             .collect();
         planned.sort_unstable();
         planned.dedup();
+        planned
+    }
+
+    /// [`StepScheduler::plan`] for fields that sit at batch indices: `facts` pairs each field's
+    /// index with its facts; returns the planned fields as (index, key), ascending by index —
+    /// what a batched step takes.
+    pub fn plan_batch(
+        &mut self,
+        facts: &[(usize, FieldFacts)],
+        policy: SchedulePolicy,
+        plateau: &PlateauConfig,
+    ) -> Vec<(usize, FieldKey)> {
+        let plain: Vec<FieldFacts> = facts.iter().map(|(_, f)| *f).collect();
+        let plan = self.plan(&plain, policy, plateau);
+        let mut planned: Vec<(usize, FieldKey)> = facts
+            .iter()
+            .filter(|(_, f)| plan.binary_search(&f.key).is_ok())
+            .map(|(index, f)| (*index, f.key))
+            .collect();
+        planned.sort_unstable();
         planned
     }
 
@@ -341,6 +485,89 @@ mod tests {
         assert!(
             first.0.iter().any(Vec::is_empty) || first.0.iter().any(|p| p.len() < 4),
             "some fields rested"
+        );
+    }
+
+    #[test]
+    fn sightings_come_from_the_latest_frame_an_object_was_seen_in() {
+        let tick = [FrameIndex(7), FrameIndex(8)];
+        let seen = |frame, keyframe| {
+            Some(LastSeen {
+                frame: FrameIndex(frame),
+                keyframe,
+            })
+        };
+        assert_eq!(Sighting::of(seen(8, false), &tick), Sighting::Seen);
+        assert_eq!(Sighting::of(seen(7, true), &tick), Sighting::NewKeyframe);
+        assert_eq!(
+            Sighting::of(seen(6, true), &tick),
+            Sighting::Unseen,
+            "seen in an earlier tick"
+        );
+        assert_eq!(Sighting::of(None, &tick), Sighting::Unseen);
+        assert_eq!(Sighting::Seen.max(Sighting::NewKeyframe), Sighting::NewKeyframe);
+        assert_eq!(Sighting::Seen.max(Sighting::Unseen), Sighting::Seen);
+    }
+
+    #[test]
+    fn a_category_member_supports_while_streaming_and_freezes_after() {
+        use FieldRole::*;
+        let role = FieldRole::of_object_field;
+        assert_eq!(role(MeshSource::OwnField, StreamPhase::Streaming), Learning);
+        assert_eq!(role(MeshSource::OwnField, StreamPhase::Ended), Learning);
+        assert_eq!(role(MeshSource::CategoryField, StreamPhase::Streaming), Supporting);
+        assert_eq!(role(MeshSource::CategoryField, StreamPhase::Ended), Frozen);
+    }
+
+    #[test]
+    fn a_category_field_is_seen_when_any_member_is() {
+        let tick = [FrameIndex(5)];
+        let seen = |frame, keyframe| {
+            Some(LastSeen {
+                frame: FrameIndex(frame),
+                keyframe,
+            })
+        };
+        let facts = category_field_facts(2, [seen(3, true), seen(5, false), None], &tick);
+        assert_eq!(
+            facts,
+            FieldFacts {
+                key: FieldKey::Category(2),
+                role: FieldRole::Learning,
+                sighting: Sighting::Seen,
+            }
+        );
+        let facts = object_field_facts(
+            ObjectId(4),
+            seen(5, true),
+            MeshSource::CategoryField,
+            StreamPhase::Streaming,
+            &tick,
+        );
+        assert_eq!(
+            (facts.role, facts.sighting),
+            (FieldRole::Supporting, Sighting::NewKeyframe)
+        );
+    }
+
+    #[test]
+    fn a_phase_ends_when_nothing_trains_or_at_its_cap() {
+        assert_eq!(PhaseEnd::of(50, 100, 3), None);
+        assert_eq!(PhaseEnd::of(100, 100, 3), Some(PhaseEnd::StepCap));
+        assert_eq!(PhaseEnd::of(50, 100, 0), Some(PhaseEnd::Converged));
+    }
+
+    #[test]
+    fn a_batch_plan_lists_the_planned_fields_by_batch_index() {
+        let mut scheduler = StepScheduler::default();
+        let facts = [
+            (2, object(7, FieldRole::Learning, Sighting::Seen)),
+            (0, object(9, FieldRole::Frozen, Sighting::Seen)),
+            (1, object(8, FieldRole::Learning, Sighting::Unseen)),
+        ];
+        assert_eq!(
+            scheduler.plan_batch(&facts, SchedulePolicy::Fast, &PLATEAU),
+            [(1, FieldKey::Object(ObjectId(8))), (2, FieldKey::Object(ObjectId(7)))]
         );
     }
 }

@@ -14,8 +14,11 @@ use catmap::nocs::NocsFrame;
 use catmap::rng::{RngStream, seeded_rng};
 use rayon::prelude::*;
 
-use crate::components::{FieldRng, FieldSlot, Keyframes, Object, Subcategories};
-use crate::resources::{Settings, StageTimes};
+use catmap::FrameIndex;
+use catmap::training::{FieldFacts, LastSeen, category_field_facts};
+
+use crate::components::{CameraFrame, FieldRng, FieldSlot, Keyframes, LatestBox, Object, Subcategories};
+use crate::resources::{Settings, StageTimes, TrainingSchedule};
 
 /// The category fields and their members.
 #[derive(Resource, Debug)]
@@ -24,6 +27,9 @@ pub struct CategoryFields {
     pub batch: CategoryBatch,
     /// Per field, its members in code order.
     pub members: Vec<Vec<ObjectId>>,
+    /// Per field, its creation number (its key in the step scheduler; kept while the field
+    /// continues under a new membership).
+    pub ids: Vec<u32>,
     /// Steps queued and not yet run.
     pub pending: u64,
     /// Steps run.
@@ -42,6 +48,7 @@ impl CategoryFields {
         Self {
             batch: CategoryBatch::new(optimiser),
             members: Vec::new(),
+            ids: Vec::new(),
             pending: 0,
             steps_done: 0,
             losses: Vec::new(),
@@ -109,11 +116,14 @@ pub fn sync_category_fields(
         }
         let mut codes_rng = seeded_rng(seed, RngStream::CategoryCodes(fields.remaps));
         fields.remaps += 1;
+        let old_ids = std::mem::take(&mut fields.ids);
         for planned in &plan {
-            let continued = planned.continues.and_then(|i| old.get_mut(i).and_then(Option::take));
-            let field = match continued {
-                Some(mut field) => match field.remap_members(&planned.codes, &mut codes_rng) {
-                    Ok(()) => field,
+            let continued = planned
+                .continues
+                .and_then(|i| Some((old.get_mut(i).and_then(Option::take)?, *old_ids.get(i)?)));
+            let (field, id) = match continued {
+                Some((mut field, id)) => match field.remap_members(&planned.codes, &mut codes_rng) {
+                    Ok(()) => (field, id),
                     Err(e) => {
                         tracing::warn!(error = %e, "category field restarted");
                         new_field(seed, cfg.code_dim, planned.members.len(), &mut fields.fields_created)
@@ -122,6 +132,7 @@ pub fn sync_category_fields(
                 None => new_field(seed, cfg.code_dim, planned.members.len(), &mut fields.fields_created),
             };
             fields.batch.push(field);
+            fields.ids.push(id);
             tracing::info!(
                 field = fields.batch.len() - 1,
                 members = ?planned.members,
@@ -155,61 +166,122 @@ pub fn sync_category_fields(
     }
 }
 
-/// A fresh category field (the `created`-th one) with `members` members.
-fn new_field(seed: u64, code_dim: usize, members: usize, created: &mut u32) -> CategoryField {
-    let mut rng = seeded_rng(seed, RngStream::CategoryField(*created));
+/// A fresh category field (the `created`-th one) with `members` members, and its number.
+fn new_field(seed: u64, code_dim: usize, members: usize, created: &mut u32) -> (CategoryField, u32) {
+    let id = *created;
+    let mut rng = seeded_rng(seed, RngStream::CategoryField(id));
     *created += 1;
-    CategoryField::new(
+    let field = CategoryField::new(
         catmap::field::category::CATEGORY_HIDDEN,
         code_dim,
         1.0,
         members,
         &mut rng,
-    )
+    );
+    (field, id)
 }
 
-/// Runs the queued category steps: every member samples its rays from its keyframes (members in
-/// parallel, each from its own generator), moves them into its NOCS frame, and all category
-/// fields train in one batched step.
+/// The members of category fields: their keyframes, slots, generators and latest sightings.
+type Members<'w, 's> = Query<
+    'w,
+    's,
+    (
+        &'static Keyframes,
+        &'static FieldSlot,
+        &'static CategorySlot,
+        &'static LatestBox,
+        &'static mut FieldRng,
+    ),
+>;
+
+/// Runs the queued category steps of the category fields the step scheduler plans for this
+/// tick: every member samples its rays from its keyframes (members in parallel, each from its
+/// own generator; the reference's ray budget per category, shared by its members), moves them
+/// into its NOCS frame, and the planned fields train in one batched step.
 pub fn train_category_fields(
     settings: Res<Settings>,
     mut fields: ResMut<CategoryFields>,
-    mut members: Query<(&Keyframes, &FieldSlot, &CategorySlot, &mut FieldRng)>,
+    mut schedule: ResMut<TrainingSchedule>,
+    frames: Query<&CameraFrame>,
+    mut members: Members,
+    objects: Query<(), (With<Object>, With<FieldSlot>)>,
     mut times: ResMut<StageTimes>,
 ) {
     if fields.pending == 0 || fields.members.is_empty() {
         fields.pending = 0;
+        schedule.planned_categories = 0;
         return;
     }
     let _timer = times.start("category_train");
-    let rays_cfg = settings
-        .0
-        .fields
-        .object_rays
-        .with_rays_per_step(settings.0.category_fields.rays_per_member);
+    let config = &settings.0;
+    let tick: Vec<FrameIndex> = frames.iter().map(|f| f.0.index).collect();
     let fields = &mut *fields;
+    let mut last_seen: Vec<Vec<LastSeen>> = vec![Vec::new(); fields.members.len()];
+    for (.., slot, latest, _) in &members {
+        if let Some(seen) = last_seen.get_mut(slot.field) {
+            seen.push(latest.last_seen());
+        }
+    }
+    let facts: Vec<(usize, FieldFacts)> = fields
+        .ids
+        .iter()
+        .zip(last_seen)
+        .map(|(&id, seen)| category_field_facts(id, seen.into_iter().map(Some), &tick))
+        .enumerate()
+        .collect();
+    let schedule = &mut *schedule;
+    let planned = schedule
+        .scheduler
+        .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
+    schedule.planned_categories = planned.len();
+    let active: Vec<usize> = planned.iter().map(|(k, _)| *k).collect();
+    let objects = objects.iter().count();
+    let member_count: usize = fields.members.iter().map(Vec::len).sum();
+    let categories = fields.members.len() + objects.saturating_sub(member_count);
+    let rays_cfg: Vec<_> = fields
+        .members
+        .iter()
+        .map(|m| {
+            let rays = config.category_fields.rays_per_member(m.len(), objects, categories);
+            config.fields.object_rays.with_rays_per_step(rays)
+        })
+        .collect();
     for _ in 0..std::mem::take(&mut fields.pending) {
-        let mut work: Vec<_> = members.iter_mut().collect();
-        work.sort_by_key(|(_, _, slot, _)| (slot.field, slot.member));
+        if active.is_empty() {
+            continue;
+        }
+        let mut work: Vec<_> = members
+            .iter_mut()
+            .filter(|(_, _, slot, ..)| active.binary_search(&slot.field).is_ok())
+            .collect();
+        work.sort_by_key(|(_, _, slot, ..)| (slot.field, slot.member));
         let sampled: Vec<_> = work
             .par_iter_mut()
-            .map(|(keyframes, field_slot, slot, rng)| {
+            .map(|(keyframes, field_slot, slot, _, rng)| {
                 let window = &keyframes.0;
                 let views: Vec<_> = window.slots().iter().map(|s| &s.data).collect();
-                let rays =
-                    sample_training_rays(&views, window.recent_slots(), &field_slot.origin, &rays_cfg, &mut rng.0);
+                let cfg = &rays_cfg[slot.field];
+                let rays = sample_training_rays(&views, window.recent_slots(), &field_slot.origin, cfg, &mut rng.0);
                 (slot.field, slot.member, field_slot.origin, slot.nocs, rays)
             })
             .collect();
-        let mut samples = vec![CategorySamples::default(); fields.members.len()];
+        let mut samples = vec![CategorySamples::default(); active.len()];
         for (field, member, origin, nocs, rays) in sampled {
+            let k = active
+                .binary_search(&field)
+                .expect("only active fields' members sample");
             let nocs_from_world = nocs.world_from_nocs.inverse();
-            if let Err(e) = samples[field].push_member_rays(rays, member, &origin, &nocs_from_world) {
+            if let Err(e) = samples[k].push_member_rays(rays, member, &origin, &nocs_from_world) {
                 tracing::warn!(field, member, error = %e, "member rays skipped");
             }
         }
-        match fields.batch.train_step(&samples) {
-            Ok(losses) => fields.losses = losses.iter().map(|l| l.total).collect(),
+        match fields.batch.train_step_of(&active, &samples) {
+            Ok(losses) => {
+                for (&(k, key), loss) in planned.iter().zip(losses) {
+                    fields.losses[k] = loss.total;
+                    schedule.scheduler.record(key, loss.total, &config.schedule.plateau);
+                }
+            }
             Err(e) => tracing::warn!(error = %e, "category training step skipped"),
         }
         fields.steps_done += 1;

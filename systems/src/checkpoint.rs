@@ -23,6 +23,7 @@ use crate::components::{
 };
 use crate::resources::{
     CategoryIndex, Fields, ObjectIndex, PhaseProgress, Settings, StageTimes, StreamProgress, TrainingQueue,
+    TrainingSchedule,
 };
 
 /// An entity's field: slot, generator and losses.
@@ -74,6 +75,7 @@ pub(crate) struct MapperState {
     config: MapperConfig,
     progress: StreamProgress,
     queue: TrainingQueue,
+    schedule: TrainingSchedule,
     phases: PhaseProgress,
     stage_seconds: BTreeMap<String, f64>,
     background: BackgroundState,
@@ -89,6 +91,8 @@ pub(crate) struct MapperState {
     category_losses: Vec<f32>,
     category_fields_created: u32,
     category_remaps: u32,
+    /// Each category field's creation number (its key in the step scheduler).
+    category_ids: Vec<u32>,
     /// What the caller stored beside the mapper (e.g. the command line), as JSON.
     pub(crate) extra: String,
 }
@@ -154,6 +158,7 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
         config: world.resource::<Settings>().0.clone(),
         progress: world.resource::<StreamProgress>().clone(),
         queue: *world.resource::<TrainingQueue>(),
+        schedule: world.resource::<TrainingSchedule>().clone(),
         phases: *world.resource::<PhaseProgress>(),
         stage_seconds: world
             .resource::<StageTimes>()
@@ -172,6 +177,7 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
         category_losses: category.losses.clone(),
         category_fields_created: category.fields_created,
         category_remaps: category.remaps,
+        category_ids: category.ids.clone(),
         extra,
     };
     Ok((state, tensors))
@@ -300,6 +306,14 @@ pub(crate) fn restore(
     category.losses = state.category_losses;
     category.fields_created = state.category_fields_created;
     category.remaps = state.category_remaps;
+    category.ids = state.category_ids;
+    if category.ids.len() != category.members.len() {
+        return Err(bad(format!(
+            "{} category fields but {} creation numbers",
+            category.members.len(),
+            category.ids.len()
+        )));
+    }
     if !tensors.is_empty() {
         let unused: Vec<_> = tensors.names().collect();
         return Err(bad(format!("tensors nobody owns: {unused:?}")));
@@ -309,6 +323,7 @@ pub(crate) fn restore(
     world.insert_resource(CategoryIndex(categories));
     world.insert_resource(state.progress);
     world.insert_resource(state.queue);
+    world.insert_resource(state.schedule);
     world.insert_resource(state.phases);
     world.insert_resource(StageTimes(
         state

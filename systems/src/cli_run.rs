@@ -59,6 +59,11 @@ pub struct RunArgs {
     /// How a class's representative is chosen (ablation: random).
     #[arg(long, value_enum)]
     pub representative: Option<Representative>,
+    /// Training schedule: fast (train only what changes the map — fields seen in the new frame
+    /// or still improving — and stop what has converged; the default) or paper (the paper's
+    /// fixed protocol: every field on every step).
+    #[arg(long, value_enum)]
+    pub schedule: Option<ScheduleArg>,
     /// Split classes into subcategories (ablation: off).
     #[arg(long, value_enum)]
     pub subcategories: Option<Switch>,
@@ -75,6 +80,15 @@ pub enum Representative {
     Uncertainty,
     /// A member drawn at random (seeded).
     Random,
+}
+
+/// Training schedules.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ScheduleArg {
+    /// Train what changes the map; stop converged and replaced fields.
+    Fast,
+    /// The paper's fixed protocol: every field on every step.
+    Paper,
 }
 
 /// On or off.
@@ -183,6 +197,12 @@ fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
             Representative::Random => catmap::uncertainty::RepresentativeChoice::Random,
         };
     }
+    if let Some(schedule) = args.schedule {
+        config.schedule.policy = match schedule {
+            ScheduleArg::Fast => catmap::training::SchedulePolicy::Fast,
+            ScheduleArg::Paper => catmap::training::SchedulePolicy::Paper,
+        };
+    }
     if let Some(switch) = args.subcategories {
         config.categories.subcategories.enabled = switch == Switch::On;
     }
@@ -222,6 +242,17 @@ mod tests {
         assert!(config.categories.enabled && config.category_fields.enabled);
         let cli = Cli::try_parse_from(["catmap"]).expect("arguments parse");
         assert_eq!(cli.args.mode, MapMode::Category);
+    }
+
+    #[test]
+    fn the_fast_schedule_is_the_default_and_paper_is_one_flag_away() {
+        use catmap::training::SchedulePolicy;
+        assert_eq!(config_of(&[]).schedule.policy, SchedulePolicy::Fast);
+        assert_eq!(config_of(&["--mode", "instance"]).schedule.policy, SchedulePolicy::Fast);
+        assert_eq!(
+            config_of(&["--schedule", "paper"]).schedule.policy,
+            SchedulePolicy::Paper
+        );
     }
 
     #[test]

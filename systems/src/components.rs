@@ -48,6 +48,19 @@ pub struct LatestBox {
     pub tight: PixelBox,
     /// The box enlarged by 20 % (training samples pixels here).
     pub sample: PixelBox,
+    /// Whether that frame became one of the object's keyframes.
+    #[serde(default)]
+    pub became_keyframe: bool,
+}
+
+impl LatestBox {
+    /// The latest sighting, for the step scheduler.
+    pub fn last_seen(&self) -> catmap::training::LastSeen {
+        catmap::training::LastSeen {
+            frame: self.frame,
+            keyframe: self.became_keyframe,
+        }
+    }
 }
 
 /// The object's keyframe window; each slot keeps the crop of its frame inside the object's

@@ -218,7 +218,7 @@ pub fn log_object_boxes(
     }
 }
 
-/// Logs each field's latest total loss (once per tick in which it trained).
+/// Logs each field's latest total loss and its steps so far (once per tick in which it trained).
 pub fn log_field_losses(
     rerun: Res<Rerun>,
     progress: Res<StreamProgress>,
@@ -230,12 +230,13 @@ pub fn log_field_losses(
         if loss.steps == 0 {
             continue;
         }
-        let path = format!(
-            "{}/loss",
-            object.map_or_else(|| paths::BACKGROUND.to_owned(), |o| paths::object(o.id))
-        );
+        let owner = object.map_or_else(|| paths::BACKGROUND.to_owned(), |o| paths::object(o.id));
+        let path = format!("{owner}/loss");
         let scalar = rerun::Scalars::single(f64::from(loss.latest.total));
         warn_on_error(rerun.0.log(path.as_str(), &scalar), &path);
+        let path = format!("{owner}/steps");
+        let steps = rerun::Scalars::single(loss.steps as f64);
+        warn_on_error(rerun.0.log(path.as_str(), &steps), &path);
     }
 }
 

@@ -6,11 +6,13 @@ use std::path::Path;
 use std::time::Duration;
 
 use bevy_ecs::prelude::*;
+use catmap::config::FirstPhase;
 use catmap::keyframes::KeyframeWindow;
 use catmap::meshing::MapMeshes;
 use catmap::observed_cloud::ObservedCloud;
 use catmap::rng::{RngStream, seeded_rng};
 use catmap::stream::{StreamMessage, StreamStats};
+use catmap::training::PhaseEnd;
 use catmap::{MapperConfig, RgbdFrame};
 use crossbeam_channel::{Receiver, Sender, TrySendError, bounded};
 
@@ -20,9 +22,12 @@ use crate::log_rerun::{Rerun, log_world_setup};
 use crate::meshes::collect_meshes;
 use crate::resources::{
     CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, SmallInstances, StageTimes,
-    StreamProgress, TrainingQueue,
+    StreamProgress, TrainingQueue, TrainingSchedule,
 };
-use crate::schedule::{build_category_schedule, build_final_mesh_schedule, build_schedule, build_training_schedule};
+use crate::schedule::{
+    build_after_stream_schedule, build_category_schedule, build_final_mesh_schedule, build_schedule,
+    build_training_schedule,
+};
 use crate::snapshot::MapSnapshot;
 
 /// Errors of the mapper facade.
@@ -50,6 +55,7 @@ pub struct Mapper {
     schedule: Schedule,
     training: Schedule,
     category_training: Schedule,
+    after_stream: Schedule,
     final_meshes: Schedule,
     /// Sending end for `push`; `None` when a reader thread feeds the inbox, or after `end_stream`.
     pusher: Option<Sender<StreamMessage>>,
@@ -84,6 +90,7 @@ impl Mapper {
         world.insert_resource(Fields::new(config.fields.optimiser()));
         world.insert_resource(CategoryFields::new(config.fields.optimiser()));
         world.init_resource::<TrainingQueue>();
+        world.init_resource::<TrainingSchedule>();
         world.insert_resource(Settings(config));
         world.insert_resource(FrameInbox(inbox));
         world.init_resource::<StreamProgress>();
@@ -97,6 +104,7 @@ impl Mapper {
             schedule: build_schedule(),
             training: build_training_schedule(),
             category_training: build_category_schedule(),
+            after_stream: build_after_stream_schedule(),
             final_meshes: build_final_mesh_schedule(),
             pusher: None,
             category_phase_started: false,
@@ -233,8 +241,9 @@ impl Mapper {
         Ok((mapper, extra))
     }
 
-    /// The training due once the stream has ended (`FieldConfig::steps_after_stream`: every step
-    /// offline, the refinement online), in chunks of 50; `on_progress` gets (done, total).
+    /// The training due once the stream has ended (`MapperConfig::after_stream`: the offline
+    /// training, the paper's refinement, or the fast schedule's one phase of every field), in
+    /// chunks of 50; `on_progress` gets (done, cap).
     pub fn train_after_stream(&mut self, mut on_progress: impl FnMut(u64, u64)) {
         self.train_after_stream_until(|done, total| {
             on_progress(done, total);
@@ -244,19 +253,41 @@ impl Mapper {
 
     /// Like [`Mapper::train_after_stream`], continuing from the steps already done (after a
     /// resume) and stopping early when `on_chunk` breaks; returns whether the phase is complete.
+    /// Under the fast schedule the phase also ends once no field gains from more steps.
     pub fn train_after_stream_until(&mut self, mut on_chunk: impl FnMut(u64, u64) -> ControlFlow<()>) -> bool {
-        let total = self.world.resource::<Settings>().0.fields.steps_after_stream() as u64;
+        let phases = self.world.resource::<Settings>().0.after_stream();
+        let total = phases.first_cap;
         loop {
-            let done = self.world.resource::<PhaseProgress>().after_stream_steps;
-            if done >= total {
+            let progress = *self.world.resource::<PhaseProgress>();
+            let done = progress.after_stream_steps;
+            if progress.after_stream_end.is_some() || done >= total {
                 return true;
             }
             let n = CHUNK_STEPS.min(total - done);
             self.world.resource_mut::<TrainingQueue>().pending += n;
-            self.training.run(&mut self.world);
-            self.world.resource_mut::<PhaseProgress>().after_stream_steps += n;
+            let planned = match phases.first {
+                FirstPhase::ObjectFields => {
+                    self.training.run(&mut self.world);
+                    self.world.resource::<TrainingSchedule>().planned_objects
+                }
+                FirstPhase::ObjectAndCategoryFields => {
+                    self.world.resource_mut::<CategoryFields>().pending += n;
+                    self.after_stream.run(&mut self.world);
+                    let schedule = self.world.resource::<TrainingSchedule>();
+                    schedule.planned_objects + schedule.planned_categories
+                }
+            };
+            let planned = if phases.ends_on_convergence {
+                planned
+            } else {
+                usize::MAX
+            };
+            let end = PhaseEnd::of(done + n, total, planned);
+            let mut progress = self.world.resource_mut::<PhaseProgress>();
+            progress.after_stream_steps += n;
+            progress.after_stream_end = end;
             if on_chunk(done + n, total).is_break() {
-                return done + n >= total;
+                return end.is_some();
             }
         }
     }
@@ -288,16 +319,19 @@ impl Mapper {
 
     /// Like [`Mapper::train_categories`], continuing from the steps already done (after a
     /// resume) and stopping early when `on_chunk` breaks; returns whether the phase is complete.
+    /// Under the fast schedule the phase also ends once no field gains from more steps; online,
+    /// the fast schedule has no category phase (the category fields trained in the phase before).
     pub fn train_categories_until(&mut self, mut on_chunk: impl FnMut(u64, u64) -> ControlFlow<()>) -> bool {
-        let cfg = self.world.resource::<Settings>().0.category_fields.clone();
-        if !cfg.enabled {
+        let phases = self.world.resource::<Settings>().0.after_stream();
+        let Some(total) = phases.category_cap else {
             return true;
-        }
-        let total = cfg.iterations as u64;
+        };
         loop {
-            let done = self.world.resource::<PhaseProgress>().category_steps;
+            let progress = *self.world.resource::<PhaseProgress>();
+            let done = progress.category_steps;
             // The first chunk runs even for zero iterations: it creates the category fields.
-            if done >= total && (done > 0 || self.category_phase_started) {
+            let started = done > 0 || self.category_phase_started;
+            if progress.category_end.is_some() || (done >= total && started) {
                 return true;
             }
             self.category_phase_started = true;
@@ -305,11 +339,30 @@ impl Mapper {
             self.world.resource_mut::<CategoryFields>().pending += n;
             self.world.resource_mut::<TrainingQueue>().pending += n;
             self.category_training.run(&mut self.world);
-            self.world.resource_mut::<PhaseProgress>().category_steps += n;
+            let schedule = self.world.resource::<TrainingSchedule>();
+            let planned = if phases.ends_on_convergence {
+                schedule.planned_objects + schedule.planned_categories
+            } else {
+                usize::MAX
+            };
+            let end = PhaseEnd::of(done + n, total, planned);
+            let mut progress = self.world.resource_mut::<PhaseProgress>();
+            progress.category_steps += n;
+            progress.category_end = end;
             if on_chunk(done + n, total).is_break() {
-                return done + n >= total;
+                return end.is_some();
             }
         }
+    }
+
+    /// How the fields have trained so far: the schedule, each field's steps and state, and why
+    /// the phases after the stream ended.
+    pub fn training_report(&self) -> crate::summary::TrainingReport {
+        crate::summary::TrainingReport::new(
+            self.world.resource::<Settings>().0.training_policy(),
+            &self.world.resource::<TrainingSchedule>().scheduler,
+            self.world.resource::<PhaseProgress>(),
+        )
     }
 
     /// Number of category fields created so far.

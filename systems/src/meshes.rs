@@ -10,7 +10,8 @@ use crate::category_fields::{CategoryFields, CategorySlot};
 use crate::components::{Background, FieldLoss, FieldMesh, FieldSlot, Object, ObjectBounds, ObjectCloud};
 use crate::resources::{Fields, Settings, StageTimes, StreamProgress};
 
-/// Fields that can be meshed: objects with a box, and the background with its cloud.
+/// Fields that can be meshed: objects with a box, and the background with its cloud (members
+/// of category fields are meshed from those instead).
 type Meshable<'w, 's> = Query<
     'w,
     's,
@@ -18,6 +19,7 @@ type Meshable<'w, 's> = Query<
         Entity,
         Option<&'static Object>,
         Has<Background>,
+        Has<CategorySlot>,
         &'static FieldSlot,
         &'static FieldLoss,
         Option<&'static ObjectBounds>,
@@ -126,11 +128,13 @@ fn mesh_fields(
 ) -> Vec<(Entity, TriangleMesh, u64)> {
     let mut work: Vec<_> = owners
         .iter()
-        .filter(|(_, _, is_background, _, loss, ..)| loss.steps > 0 && (with_background || !is_background))
+        .filter(|(_, _, is_background, member, _, loss, ..)| {
+            loss.steps > 0 && !member && (with_background || !is_background)
+        })
         .collect();
     work.sort_by_key(|(_, object, ..)| object.map(|o| o.id));
     work.par_iter()
-        .filter_map(|&(entity, object, is_background, slot, loss, bounds, cloud)| {
+        .filter_map(|&(entity, object, is_background, _, slot, loss, bounds, cloud)| {
             let (field, frame, config) = if is_background {
                 let frame = ObjectFrame::from_aabb(&Aabb::from_points(cloud.0.points().iter())?);
                 (fields.background.field(slot.index)?, frame, background_config)

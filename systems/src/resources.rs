@@ -117,4 +117,22 @@ pub struct PhaseProgress {
     pub after_stream_steps: u64,
     /// Steps of the category phase done.
     pub category_steps: u64,
+    /// Why the training after the stream ended, once it has.
+    #[serde(default)]
+    pub after_stream_end: Option<catmap::training::PhaseEnd>,
+    /// Why the category phase ended, once it has.
+    #[serde(default)]
+    pub category_end: Option<catmap::training::PhaseEnd>,
+}
+
+/// The step scheduler (which fields take the next steps; each field's steps and losses) and
+/// the size of its latest plans.
+#[derive(Resource, Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TrainingSchedule {
+    /// The scheduler's state.
+    pub scheduler: catmap::training::StepScheduler,
+    /// Object fields in the latest plan.
+    pub planned_objects: usize,
+    /// Category fields in the latest plan.
+    pub planned_categories: usize,
 }

@@ -35,6 +35,7 @@ pub fn write_outputs(mut mapper: Mapper, plan: &RunPlan, dataset_name: String, s
         stage_seconds.insert("read (reader thread)".to_owned(), stats.decode_time.as_secs_f64());
     }
     let training_steps = mapper.training_steps();
+    let training = mapper.training_report();
     let map = mapper.finish();
     let seconds = || plan.seconds_before + started.elapsed().as_secs_f64();
     let mut summary = RunSummary::new(dataset_name, &map, stage_seconds, seconds());
@@ -45,6 +46,7 @@ pub fn write_outputs(mut mapper: Mapper, plan: &RunPlan, dataset_name: String, s
     };
     summary.mode = format!("{:?}{protocol}", plan.mode).to_lowercase();
     summary.training_steps = training_steps;
+    summary.training = Some(training);
     summary
         .finishing_steps
         .insert("recording".to_owned(), complete_recording(plan));

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use catmap::CatmapError;
-use catmap::config::CheckpointConfig;
+use catmap::config::{CheckpointConfig, FirstPhase};
 use catmap::dataset::FrameSource;
 use catmap::stream::{FrameStream, stream_positions};
 use catmap_systems::Mapper;
@@ -68,11 +68,15 @@ pub fn drive(mut mapper: Mapper, plan: RunPlan, source: Arc<dyn FrameSource>, st
         stream.join();
     }
 
-    let after_stream = config.fields.steps_after_stream() as u64;
+    let phases = config.after_stream();
     let every_steps = checkpoints.every_steps();
-    if after_stream > 0 {
-        let what = if config.fields.offline { "training" } else { "refining" };
-        let progress = bar(after_stream, what);
+    if phases.first_cap > 0 {
+        let what = match (config.fields.offline, phases.first) {
+            (true, _) => "training",
+            (false, FirstPhase::ObjectFields) => "refining",
+            (false, FirstPhase::ObjectAndCategoryFields) => "refining (objects and categories)",
+        };
+        let progress = bar(phases.first_cap, what);
         while !mapper.train_after_stream_until(|done, _| {
             progress.set_position(done);
             checkpoints.break_if(done.is_multiple_of(every_steps))
@@ -82,8 +86,8 @@ pub fn drive(mut mapper: Mapper, plan: RunPlan, source: Arc<dyn FrameSource>, st
         }
         progress.finish_and_clear();
     }
-    if config.category_fields.enabled {
-        let progress = bar(config.category_fields.iterations as u64, "category fields");
+    if let Some(cap) = phases.category_cap {
+        let progress = bar(cap, "category fields");
         while !mapper.train_categories_until(|done, _| {
             progress.set_position(done);
             checkpoints.break_if(done.is_multiple_of(every_steps))
@@ -91,6 +95,8 @@ pub fn drive(mut mapper: Mapper, plan: RunPlan, source: Arc<dyn FrameSource>, st
             checkpoints.save(&mut mapper, "category fields")?;
         }
         progress.finish_and_clear();
+    }
+    if config.category_fields.enabled {
         tracing::info!(
             category_fields = mapper.category_field_count(),
             "category fields trained"

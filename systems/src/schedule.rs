@@ -136,6 +136,29 @@ pub fn build_category_schedule() -> Schedule {
     schedule
 }
 
+/// The fast schedule's phase after the stream (online, category mode): the per-object and the
+/// category fields train together as the step scheduler plans; classes still due are
+/// registered and the category fields follow the registrations.
+pub fn build_after_stream_schedule() -> Schedule {
+    let mut schedule = Schedule::default();
+    schedule.set_executor(SingleThreadedExecutor::new());
+    schedule.add_systems((
+        (
+            attach_fields,
+            train_fields,
+            train_category_fields,
+            register_categories,
+            sync_category_fields,
+        )
+            .chain(),
+        (log_field_losses, log_memberships, log_category_training)
+            .chain()
+            .after(sync_category_fields)
+            .run_if(resource_exists::<Rerun>),
+    ));
+    schedule
+}
+
 /// The schedule that meshes every field at final resolution and logs the meshes.
 pub fn build_final_mesh_schedule() -> Schedule {
     let mut schedule = Schedule::default();

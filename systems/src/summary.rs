@@ -55,9 +55,71 @@ pub struct RunSummary {
     pub frames_per_second: f64,
     /// Largest resident memory of the process so far, MiB (Linux; absent elsewhere).
     pub peak_resident_mib: Option<f64>,
+    /// How the fields trained: the schedule, each field's steps and state, and why the phases
+    /// after the stream ended.
+    pub training: Option<TrainingReport>,
     /// What became of each step after the map was made (`recording`: the recording's
     /// completion, `eval`: the evaluation). A failure here never fails the run.
     pub finishing_steps: BTreeMap<String, StepOutcome>,
+}
+
+/// How the fields trained.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrainingReport {
+    /// `fast` or `paper`.
+    pub schedule: catmap::training::SchedulePolicy,
+    /// Per field (`object 3`, `category 0`): steps taken, its final state, and the step count at
+    /// which it last converged.
+    pub fields: BTreeMap<String, FieldTraining>,
+    /// Why the training right after the stream ended.
+    pub after_stream_end: Option<catmap::training::PhaseEnd>,
+    /// Why the category phase ended (when there was one).
+    pub category_end: Option<catmap::training::PhaseEnd>,
+}
+
+/// One field's training.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FieldTraining {
+    /// Steps it took.
+    pub steps: u64,
+    /// Its state at the end.
+    pub state: catmap::training::FieldState,
+    /// Steps it had taken when it last converged.
+    pub converged_at: Option<u64>,
+}
+
+impl TrainingReport {
+    /// The report of a mapper's schedule and phases.
+    pub fn new(
+        schedule: catmap::training::SchedulePolicy,
+        scheduler: &catmap::training::StepScheduler,
+        phases: &crate::resources::PhaseProgress,
+    ) -> Self {
+        use catmap::training::FieldKey;
+        let fields = scheduler
+            .progress()
+            .iter()
+            .map(|(key, p)| {
+                let name = match key {
+                    FieldKey::Object(id) => format!("object {id}"),
+                    FieldKey::Category(k) => format!("category {k}"),
+                    FieldKey::Background => "background".to_owned(),
+                };
+                let row = FieldTraining {
+                    steps: p.steps,
+                    state: p.state,
+                    converged_at: p.converged_at,
+                };
+                (name, row)
+            })
+            .collect();
+        Self {
+            schedule,
+            fields,
+            after_stream_end: phases.after_stream_end,
+            category_end: phases.category_end,
+        }
+    }
 }
 
 /// What became of one step after the map was made.
@@ -149,6 +211,7 @@ impl RunSummary {
             total_seconds,
             frames_per_second: map.frames_ingested as f64 / total_seconds.max(1e-9),
             peak_resident_mib: catmap::process_memory::peak_resident_mib(),
+            training: None,
             finishing_steps: BTreeMap::new(),
         }
     }
@@ -180,6 +243,26 @@ impl RunSummary {
             let _ = writeln!(out, "| {class} | {n} |");
         }
         let _ = writeln!(out, "| **all** | {} |", self.objects.len());
+        if let Some(training) = &self.training {
+            let ended = |end: Option<catmap::training::PhaseEnd>| match end {
+                Some(catmap::training::PhaseEnd::Converged) => "every field converged",
+                Some(catmap::training::PhaseEnd::StepCap) => "step cap reached",
+                None => "–",
+            };
+            let _ = writeln!(
+                out,
+                "\ntraining ({:?} schedule): after the stream, {}",
+                training.schedule,
+                ended(training.after_stream_end)
+            );
+            if training.category_end.is_some() {
+                let _ = writeln!(out, "category phase: {}", ended(training.category_end));
+            }
+            let _ = writeln!(out, "\n| field | steps | state |\n|---|---:|---|");
+            for (name, field) in &training.fields {
+                let _ = writeln!(out, "| {name} | {} | {:?} |", field.steps, field.state);
+            }
+        }
         let _ = writeln!(out, "\n| stage | seconds |\n|---|---:|");
         for (stage, secs) in &self.stage_seconds {
             let _ = writeln!(out, "| {stage} | {secs:.2} |");

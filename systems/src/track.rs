@@ -44,6 +44,7 @@ pub fn spawn_new_objects(
                         frame: frame.0.index,
                         tight: observation.tight_box,
                         sample: observation.sample_box,
+                        became_keyframe: false,
                     },
                     Keyframes::default(),
                     VisibleFrames::default(),
@@ -88,11 +89,6 @@ pub fn record_object_views(
             if let Some(majority) = majority_class(&votes.0) {
                 class.set_if_neq(ObjectClass(majority));
             }
-            *latest = LatestBox {
-                frame: frame.0.index,
-                tight: observation.tight_box,
-                sample: observation.sample_box,
-            };
             visible.0 += 1;
             let view = ObjectView::crop(&frame.0, observation.sample_box, ViewOwner::Object(*id));
             let admission = keyframes.0.offer(
@@ -102,6 +98,12 @@ pub fn record_object_views(
                 &settings.0.keyframes,
                 &mut rng.0,
             );
+            *latest = LatestBox {
+                frame: frame.0.index,
+                tight: observation.tight_box,
+                sample: observation.sample_box,
+                became_keyframe: admission.is_keyframe(),
+            };
             if let Admission::Overwrote {
                 replaced,
                 keyframe: true,

@@ -1,5 +1,6 @@
 //! Train stage: objects with a box get a field, incoming frames queue training steps, and the
-//! queued steps run — all object fields as one batched step, the background every n-th step.
+//! queued steps run — the object fields the step scheduler plans (`catmap::training`) as one
+//! batched step, the background every n-th step.
 
 use bevy_ecs::prelude::*;
 use catmap::field::{
@@ -9,9 +10,14 @@ use catmap::rng::{RngStream, seeded_rng};
 use nalgebra::Point3;
 use rayon::prelude::*;
 
-use crate::category_fields::CategoryFields;
-use crate::components::{Background, CameraFrame, FieldLoss, FieldRng, FieldSlot, Keyframes, Object, ObjectBounds};
-use crate::resources::{Fields, Settings, StageTimes, TrainingQueue};
+use catmap::FrameIndex;
+use catmap::training::{FieldFacts, MeshSource, StreamPhase, object_field_facts};
+
+use crate::category_fields::{CategoryFields, CategorySlot};
+use crate::components::{
+    Background, CameraFrame, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Object, ObjectBounds,
+};
+use crate::resources::{Fields, Settings, StageTimes, StreamProgress, TrainingQueue, TrainingSchedule};
 
 /// Gives every object that has a box (and the background, once it has keyframes) its field,
 /// in object-id order so that batch indices do not depend on query order.
@@ -74,12 +80,25 @@ pub fn queue_online_steps(
     }
 }
 
-/// The owners of fields: whether it is the background, its keyframes, slot, generator and loss.
+/// Which batch a step trains.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum FieldOwner {
+    /// The object fields.
+    Objects,
+    /// The background field.
+    Background,
+}
+
+/// The owners of fields: whether it is the background, the object (and its latest sighting
+/// and category membership), its keyframes, slot, generator and loss.
 type FieldOwners<'w, 's> = Query<
     'w,
     's,
     (
         Has<Background>,
+        Option<&'static Object>,
+        Option<&'static LatestBox>,
+        Has<CategorySlot>,
         &'static Keyframes,
         &'static FieldSlot,
         &'static mut FieldRng,
@@ -87,13 +106,16 @@ type FieldOwners<'w, 's> = Query<
     ),
 >;
 
-/// Runs the queued steps: each step samples every field's rays (fields in parallel, each from
-/// its own generator) and trains all object fields in one batched step; the background trains
-/// every `background_every`-th step.
+/// Runs the queued steps of the object fields the step scheduler plans for this tick (fields
+/// in parallel, each sampling from its own generator; the planned ones in one batched step),
+/// recording each one's loss; the background trains every `background_every`-th step.
 pub fn train_fields(
     settings: Res<Settings>,
     mut fields: ResMut<Fields>,
     mut queue: ResMut<TrainingQueue>,
+    mut schedule: ResMut<TrainingSchedule>,
+    progress: Res<StreamProgress>,
+    frames: Query<&CameraFrame>,
     mut owners: FieldOwners,
     mut times: ResMut<StageTimes>,
 ) {
@@ -101,18 +123,55 @@ pub fn train_fields(
         return;
     }
     let _timer = times.start("train");
-    let cfg = &settings.0.fields;
+    let config = &settings.0;
+    let cfg = &config.fields;
+    let tick: Vec<FrameIndex> = frames.iter().map(|f| f.0.index).collect();
+    let phase = stream_phase(&progress);
+    let facts: Vec<(usize, FieldFacts)> = owners
+        .iter()
+        .filter_map(|(_, object, latest, member, _, slot, ..)| {
+            let mesh = if member {
+                MeshSource::CategoryField
+            } else {
+                MeshSource::OwnField
+            };
+            let facts = object_field_facts(object?.id, latest.map(LatestBox::last_seen), mesh, phase, &tick);
+            Some((slot.index, facts))
+        })
+        .collect();
+    let schedule = &mut *schedule;
+    let active = schedule
+        .scheduler
+        .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
+    schedule.planned_objects = active.len();
+    let indices: Vec<usize> = active.iter().map(|(i, _)| *i).collect();
     let fields = &mut *fields;
     for _ in 0..std::mem::take(&mut queue.pending) {
-        if !fields.objects.is_empty() {
-            let losses = train_one(&mut owners, false, &mut fields.objects, &cfg.object_rays);
-            if let Err(e) = losses {
-                tracing::warn!(error = %e, "object training step skipped");
+        if !indices.is_empty() {
+            match train_one(
+                &mut owners,
+                FieldOwner::Objects,
+                &indices,
+                &mut fields.objects,
+                &cfg.object_rays,
+            ) {
+                Ok(losses) => {
+                    for ((_, key), loss) in active.iter().zip(losses) {
+                        schedule.scheduler.record(*key, loss, &config.schedule.plateau);
+                    }
+                }
+                Err(e) => tracing::warn!(error = %e, "object training step skipped"),
             }
         }
         let background_due = cfg.background_every > 0 && queue.steps_done.is_multiple_of(cfg.background_every as u64);
         if background_due && !fields.background.is_empty() {
-            let losses = train_one(&mut owners, true, &mut fields.background, &cfg.background_rays);
+            let losses = train_one(
+                &mut owners,
+                FieldOwner::Background,
+                &[0],
+                &mut fields.background,
+                &cfg.background_rays,
+            );
             if let Err(e) = losses {
                 tracing::warn!(error = %e, "background training step skipped");
             }
@@ -121,38 +180,53 @@ pub fn train_fields(
     }
 }
 
-/// One step of `batch`: samples the rays of its owners (the background's, or the objects') in
-/// parallel, trains, and records each owner's losses.
+/// Whether frames still stream in.
+pub fn stream_phase(progress: &StreamProgress) -> StreamPhase {
+    if progress.ended.is_some() {
+        StreamPhase::Ended
+    } else {
+        StreamPhase::Streaming
+    }
+}
+
+/// One step of the fields `indices` (ascending) of `batch`: samples their owners' rays (the
+/// background's, or the objects') in parallel, trains, and records each owner's losses;
+/// returns their total losses, in index order.
 fn train_one(
     owners: &mut FieldOwners,
-    background: bool,
+    owner: FieldOwner,
+    indices: &[usize],
     batch: &mut catmap::field::FieldBatch,
     rays: &RaySamplerConfig,
-) -> catmap::Result<()> {
+) -> catmap::Result<Vec<f32>> {
+    let background = owner == FieldOwner::Background;
     let mut work: Vec<_> = owners
         .iter_mut()
-        .filter(|(is_background, ..)| *is_background == background)
+        .filter(|(is_background, .., slot, _, _)| {
+            *is_background == background && indices.binary_search(&slot.index).is_ok()
+        })
+        .map(|(_, _, _, _, keyframes, slot, rng, loss)| (keyframes, slot, rng, loss))
         .collect();
-    work.sort_by_key(|(_, _, slot, _, _)| slot.index);
-    if work.len() != batch.len() || work.iter().enumerate().any(|(i, (_, _, slot, _, _))| slot.index != i) {
+    work.sort_by_key(|(_, slot, _, _)| slot.index);
+    let owned: Vec<usize> = work.iter().map(|(_, slot, _, _)| slot.index).collect();
+    if owned != indices || indices.last().is_some_and(|&i| i >= batch.len()) {
         return Err(catmap::CatmapError::Degenerate(format!(
-            "{} fields but {} owners with matching slots",
-            batch.len(),
-            work.len()
+            "{} fields but owners with slots {owned:?} for the planned {indices:?}",
+            batch.len()
         )));
     }
     let fields: Vec<RaySamples> = work
         .par_iter_mut()
-        .map(|(_, keyframes, slot, rng, _)| {
+        .map(|(keyframes, slot, rng, _)| {
             let window = &keyframes.0;
             let views: Vec<_> = window.slots().iter().map(|s| &s.data).collect();
             sample_training_rays(&views, window.recent_slots(), &slot.origin, rays, &mut rng.0)
         })
         .collect();
-    let losses = batch.train_step(&SampleBatch { fields })?;
-    for ((.., loss), latest) in work.iter_mut().zip(losses) {
-        loss.latest = latest;
+    let losses = batch.train_step_of(indices, &SampleBatch { fields })?;
+    for ((.., loss), latest) in work.iter_mut().zip(&losses) {
+        loss.latest = *latest;
         loss.steps += 1;
     }
-    Ok(())
+    Ok(losses.iter().map(|l| l.total).collect())
 }

@@ -115,18 +115,30 @@ impl CategoryBatch {
     /// One training step on `samples` (one [`CategorySamples`] per category, in order): returns
     /// each category's losses before the update.
     pub fn train_step(&mut self, samples: &[CategorySamples]) -> Result<Vec<CategoryLosses>> {
-        let losses = self.compute_gradients(samples)?;
+        let all: Vec<usize> = (0..self.fields.len()).collect();
+        self.train_step_of(&all, samples)
+    }
+
+    /// One training step of the categories `active` only (ascending indices; one
+    /// [`CategorySamples`] per active category, in that order): returns their losses before the
+    /// update. The other categories' weights, codes and optimiser moments stay bit for bit.
+    pub fn train_step_of(&mut self, active: &[usize], samples: &[CategorySamples]) -> Result<Vec<CategoryLosses>> {
+        let losses = self.compute_gradients(active, samples)?;
         let optim = self.optim;
-        self.fields
-            .par_iter_mut()
-            .zip(self.grads.par_iter())
-            .for_each(|(field, grad)| {
-                let ((params, state), codes) = field.states_mut();
-                state.update(&optim, params, &grad.weights);
-                for ((code, state), g) in codes.into_iter().zip(&grad.codes) {
-                    state.update(&optim, code, g);
-                }
-            });
+        let grads = &self.grads;
+        let mut updates: Vec<(&mut CategoryField, &CategoryGradients)> = self
+            .fields
+            .iter_mut()
+            .enumerate()
+            .filter_map(|(i, field)| active.binary_search(&i).ok().map(|k| (field, &grads[k])))
+            .collect();
+        updates.par_iter_mut().for_each(|(field, grad)| {
+            let ((params, state), codes) = field.states_mut();
+            state.update(&optim, params, &grad.weights);
+            for ((code, state), g) in codes.into_iter().zip(&grad.codes) {
+                state.update(&optim, code, g);
+            }
+        });
         Ok(losses)
     }
 
@@ -135,19 +147,29 @@ impl CategoryBatch {
         &mut self,
         samples: &[CategorySamples],
     ) -> Result<(Vec<CategoryLosses>, Vec<CategoryGradients>)> {
-        let losses = self.compute_gradients(samples)?;
+        let all: Vec<usize> = (0..self.fields.len()).collect();
+        let losses = self.compute_gradients(&all, samples)?;
         Ok((losses, self.grads[..self.fields.len()].to_vec()))
     }
 
-    fn compute_gradients(&mut self, samples: &[CategorySamples]) -> Result<Vec<CategoryLosses>> {
-        if samples.len() != self.fields.len() {
+    /// Losses and gradients of the categories `active` (ascending), whose samples come in that
+    /// order; `self.grads[k]` belongs to category `active[k]`.
+    fn compute_gradients(&mut self, active: &[usize], samples: &[CategorySamples]) -> Result<Vec<CategoryLosses>> {
+        if samples.len() != active.len() {
             return Err(CatmapError::Degenerate(format!(
-                "{} categories but samples for {}",
-                self.fields.len(),
+                "{} categories to train but samples for {}",
+                active.len(),
                 samples.len()
             )));
         }
-        for (s, field) in samples.iter().zip(&self.fields) {
+        if active.windows(2).any(|w| w[0] >= w[1]) || active.last().is_some_and(|&i| i >= self.fields.len()) {
+            return Err(CatmapError::Degenerate(format!(
+                "category indices {active:?} must ascend and lie below {}",
+                self.fields.len()
+            )));
+        }
+        let fields: Vec<&CategoryField> = active.iter().map(|&i| &self.fields[i]).collect();
+        for (s, field) in samples.iter().zip(&fields) {
             s.validate(field.num_members())?;
         }
         let backend = self.backend;
@@ -156,17 +178,17 @@ impl CategoryBatch {
             nets.iter()
                 .find(|n| (n.hidden, n.code_dim) == (f.hidden(), f.code_dim()))
         };
-        let nets_of: Vec<&CategoryNet> = self.fields.iter().filter_map(net_of).collect();
-        debug_assert_eq!(nets_of.len(), self.fields.len(), "every shape has a net");
+        let nets_of: Vec<&CategoryNet> = fields.iter().filter_map(|f| net_of(f)).collect();
+        debug_assert_eq!(nets_of.len(), fields.len(), "every shape has a net");
 
         // Pack weights and evaluate the code tables.
-        let codes: Vec<Vec<Vec<f32>>> = self.fields.iter().map(CategoryField::codes).collect();
-        self.packed.resize_with(self.fields.len(), Vec::new);
-        self.tables.resize_with(self.fields.len(), Vec::new);
+        let codes: Vec<Vec<Vec<f32>>> = fields.iter().map(|f| f.codes()).collect();
+        self.packed.resize_with(fields.len().max(self.packed.len()), Vec::new);
+        self.tables.resize_with(fields.len().max(self.tables.len()), Vec::new);
         self.packed
             .par_iter_mut()
             .zip(self.tables.par_iter_mut())
-            .zip(&self.fields)
+            .zip(&fields)
             .zip(&nets_of)
             .zip(&codes)
             .for_each(|((((packed, table), field), net), codes)| {
@@ -179,12 +201,12 @@ impl CategoryBatch {
         let units: Vec<usize> = samples.iter().map(|s| s.rays.num_rays()).collect();
         let cost: Vec<usize> = samples
             .iter()
-            .zip(&self.fields)
+            .zip(&fields)
             .map(|(s, f)| s.rays.samples_per_ray * f.param_count())
             .collect();
         let tasks = plan_tasks(&units, &cost, TASK_WORK);
         let norms: Vec<LossNorm> = samples.iter().map(|s| LossNorm::of(&s.rays)).collect();
-        let (fields, packed, tables) = (&self.fields, &self.packed, &self.tables);
+        let (packed, tables) = (&self.packed, &self.tables);
         let dc_len = |f: usize| fields[f].num_members() * nets_of[f].table_row();
         let task_losses = self.pool.run(
             &tasks,
@@ -213,9 +235,10 @@ impl CategoryBatch {
         );
 
         // Deterministic per-category reduction, code backward and regulariser.
-        let by_field = tasks_by_field(&tasks, self.fields.len());
+        let by_field = tasks_by_field(&tasks, fields.len());
         let task_grads = self.pool.grads();
-        self.grads.resize_with(self.fields.len(), CategoryGradients::default);
+        self.grads
+            .resize_with(fields.len().max(self.grads.len()), CategoryGradients::default);
         let regs: Vec<f32> = self
             .grads
             .par_iter_mut()

@@ -1,0 +1,128 @@
+//! [`AfterStream`]: the training phases once the stream has ended, resolved from the config.
+
+use crate::training::SchedulePolicy;
+
+use super::MapperConfig;
+
+/// Which fields train in the phase right after the stream.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FirstPhase {
+    /// The per-object fields only (offline training, or the paper's refinement).
+    ObjectFields,
+    /// The per-object fields and the category fields together (fast schedule, online).
+    ObjectAndCategoryFields,
+}
+
+/// The training once the stream has ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AfterStream {
+    /// What the first phase trains.
+    pub first: FirstPhase,
+    /// Most steps of the first phase.
+    pub first_cap: u64,
+    /// Most steps of the category phase that follows (`None`: no category phase).
+    pub category_cap: Option<u64>,
+    /// Whether a phase ends early once no field gains from more steps (the fast schedule).
+    pub ends_on_convergence: bool,
+}
+
+impl MapperConfig {
+    /// The schedule that applies: `schedule.policy`, except that the offline protocol is the
+    /// paper's fixed one (its classes are registered on the finished per-object fields).
+    pub fn training_policy(&self) -> SchedulePolicy {
+        if self.fields.offline {
+            SchedulePolicy::Paper
+        } else {
+            self.schedule.policy
+        }
+    }
+
+    /// The phases after the stream: the paper's fixed protocol (`fields.final_steps` or
+    /// `fields.offline_iterations`, then `category_fields.iterations`), or the fast schedule's
+    /// (online only: one phase of every field up to `schedule.max_steps_after_stream`, ending
+    /// early once no field gains from more steps).
+    pub fn after_stream(&self) -> AfterStream {
+        let fast = self.training_policy() == SchedulePolicy::Fast;
+        let categories = self.category_fields.enabled;
+        let merged = fast && categories && self.fields.enabled;
+        let first_cap = if fast && self.fields.enabled {
+            self.schedule.max_steps_after_stream
+        } else {
+            self.fields.steps_after_stream()
+        };
+        AfterStream {
+            first: if merged {
+                FirstPhase::ObjectAndCategoryFields
+            } else {
+                FirstPhase::ObjectFields
+            },
+            first_cap: first_cap as u64,
+            category_cap: (categories && !merged).then_some(self.category_fields.iterations as u64),
+            ends_on_convergence: fast,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::training::ScheduleConfig;
+
+    fn config(policy: SchedulePolicy, offline: bool, categories: bool) -> MapperConfig {
+        let mut c = MapperConfig {
+            schedule: ScheduleConfig {
+                policy,
+                max_steps_after_stream: 4_000,
+                ..ScheduleConfig::default()
+            },
+            ..MapperConfig::default()
+        };
+        c.fields.offline = offline;
+        c.category_fields.enabled = categories;
+        c
+    }
+
+    #[test]
+    fn the_fast_schedule_online_trains_every_field_in_one_phase() {
+        let phases = config(SchedulePolicy::Fast, false, true).after_stream();
+        assert_eq!(
+            phases,
+            AfterStream {
+                first: FirstPhase::ObjectAndCategoryFields,
+                first_cap: 4_000,
+                category_cap: None,
+                ends_on_convergence: true,
+            }
+        );
+        let instance = config(SchedulePolicy::Fast, false, false).after_stream();
+        assert_eq!(
+            (instance.first, instance.category_cap),
+            (FirstPhase::ObjectFields, None)
+        );
+    }
+
+    #[test]
+    fn the_paper_schedule_and_the_offline_protocol_keep_their_step_counts() {
+        let paper = config(SchedulePolicy::Paper, false, true).after_stream();
+        assert_eq!(
+            paper,
+            AfterStream {
+                first: FirstPhase::ObjectFields,
+                first_cap: 3_000,
+                category_cap: Some(10_000),
+                ends_on_convergence: false,
+            }
+        );
+        let offline = config(SchedulePolicy::Fast, true, true);
+        assert_eq!(
+            offline.training_policy(),
+            SchedulePolicy::Paper,
+            "offline is a fixed protocol"
+        );
+        let offline = offline.after_stream();
+        assert_eq!(
+            (offline.first_cap, offline.category_cap, offline.ends_on_convergence),
+            (15_000, Some(10_000), false)
+        );
+    }
+}
