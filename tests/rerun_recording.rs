@@ -48,8 +48,6 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         config.categories.min_field_steps = 1;
         config.category_fields.enabled = true;
         config.category_fields.iterations = 20;
-        // The fast schedule trains the category fields after the stream, with the objects.
-        config.schedule.max_steps_after_stream = 100;
         let mut mapper = Mapper::new(config).expect("config");
         mapper.set_recording(rec);
         for position in 0..scene.len() {
@@ -58,7 +56,6 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         }
         mapper.end_stream();
         mapper.step();
-        mapper.train_after_stream(|_, _| {});
         assert_eq!(mapper.train_categories(|_, _| {}), 1, "one category field");
         let map = mapper.finish();
         assert!(map.objects.len() >= 3, "the small scene maps several objects");

@@ -39,7 +39,7 @@ impl Default for CategoryFieldConfig {
             iterations: 10_000,
             code_dim: 32,
             rays_per_object: 120,
-            ray_budget: CategoryRayBudget::PerCategory,
+            ray_budget: CategoryRayBudget::PerMember,
         }
     }
 }
@@ -65,7 +65,10 @@ mod tests {
 
     #[test]
     fn the_reference_budget_shares_the_average_category_rays_among_members() {
-        let cfg = CategoryFieldConfig::default();
+        let cfg = CategoryFieldConfig {
+            ray_budget: CategoryRayBudget::PerCategory,
+            ..CategoryFieldConfig::default()
+        };
         // 14 objects: two 4-member category fields and 6 objects on their own = 8 categories;
         // 120 · 14 / 8 = 210 rays per category, 53 per member of a 4-member field.
         assert_eq!(cfg.rays_per_member(4, 14, 8), 53);

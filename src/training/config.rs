@@ -9,10 +9,11 @@ use super::scheduler::SchedulePolicy;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ScheduleConfig {
-    /// `fast`: each tick trains only the fields that gain from it (seen in the new frame, or
+    /// `paper` (the default until the fast schedule matches its quality; see the README): the
+    /// fixed protocol below. `fast`: each tick trains only the fields that gain from it (seen in the new frame, or
     /// whose loss still falls), category members' own fields rest once their category field
     /// makes their mesh, and one phase after the stream trains until every field has converged
-    /// or `max_steps_after_stream`. `paper`: the fixed protocol — every field on every step,
+    /// or `max_steps_after_stream`. `paper`: every field on every step,
     /// `fields.final_steps` refinement steps, then `category_fields.iterations` category steps.
     pub policy: SchedulePolicy,
     /// When a field's loss counts as converged (fast schedule).
@@ -24,7 +25,7 @@ pub struct ScheduleConfig {
 impl Default for ScheduleConfig {
     fn default() -> Self {
         Self {
-            policy: SchedulePolicy::Fast,
+            policy: SchedulePolicy::Paper,
             plateau: PlateauConfig::default(),
             max_steps_after_stream: 5_000,
         }
@@ -37,11 +38,11 @@ mod tests {
 
     #[test]
     fn a_config_file_may_name_only_the_policy() {
-        let cfg: ScheduleConfig = toml::from_str(r#"policy = "paper""#).expect("valid TOML");
+        let cfg: ScheduleConfig = toml::from_str(r#"policy = "fast""#).expect("valid TOML");
         assert_eq!(
             cfg,
             ScheduleConfig {
-                policy: SchedulePolicy::Paper,
+                policy: SchedulePolicy::Fast,
                 ..ScheduleConfig::default()
             }
         );
