@@ -32,8 +32,10 @@ impl Default for MeshConfig {
 impl MeshConfig {
     /// The object settings with the preview spacing.
     pub fn preview(&self) -> ObjectMeshConfig {
+        // Dense: at 2 cm a coarse block would span 8 cm, wider than a chair's legs.
         ObjectMeshConfig {
             voxel_size_m: self.preview_voxel_m,
+            coarse_block: 1,
             ..self.object.clone()
         }
     }
@@ -43,6 +45,7 @@ impl MeshConfig {
         ObjectMeshConfig {
             voxel_size_m: self.background_voxel_m,
             box_fill: 1.0,
+            coarse_block: 1,
             ..self.object.clone()
         }
     }

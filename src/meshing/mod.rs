@@ -4,7 +4,8 @@
 //!   welded, outward-oriented [`TriangleMesh`](crate::mesh::TriangleMesh) (inside = value > iso).
 //! - [`extract_object_mesh`]: METHOD.md §6 — sample an object's occupancy on a 5 mm grid over its
 //!   enlarged box, one z-layer at a time, and mesh it at occupancy 0.5 in world coordinates;
-//!   [`paint_vertices`] adds colours from the field.
+//!   [`paint_vertices`] adds colours from the field. By default the grid is sampled coarse to fine
+//!   ([`coarse_to_fine`]): the field is evaluated densely only in blocks the surface may cross.
 //!
 //! ```
 //! use catmap::meshing::{SampleGrid, marching_cubes};
@@ -22,6 +23,7 @@
 //! ```
 
 pub mod case_table;
+pub mod coarse_to_fine;
 mod field_mesh;
 mod map_meshes;
 mod marching_cubes;
