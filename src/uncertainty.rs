@@ -180,6 +180,28 @@ pub fn object_reliability(
     }
 }
 
+/// What an object's uncertainty sphere was evaluated on: its cloud's size (the sphere's box) and
+/// its field's training steps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct UncertaintyStamp {
+    /// Points of the observed cloud.
+    pub cloud_points: usize,
+    /// Steps the object's field had taken.
+    pub field_steps: u64,
+}
+
+impl UncertaintyStamp {
+    /// Whether a sphere evaluated at `self` still describes the object at `now`: neither its
+    /// cloud nor its field's steps grew by more than `growth` (a fraction) since.
+    pub fn still_describes(&self, now: &UncertaintyStamp, growth: f32) -> bool {
+        let within = |then: f64, now: f64| now <= then * (1.0 + f64::from(growth));
+        within(self.cloud_points as f64, now.cloud_points as f64)
+            && within(self.field_steps as f64, now.field_steps as f64)
+            && now.cloud_points >= self.cloud_points
+            && now.field_steps >= self.field_steps
+    }
+}
+
 /// The representative among `(object, reliable rays)`: the most reliable rays (ties: the smaller
 /// id), or a seeded random member for the ablation.
 pub fn choose_representative(
@@ -206,6 +228,24 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
+
+    #[test]
+    fn a_sphere_is_evaluated_again_only_after_material_growth() {
+        let then = UncertaintyStamp {
+            cloud_points: 1_000,
+            field_steps: 400,
+        };
+        let grown = |cloud_points, field_steps| UncertaintyStamp {
+            cloud_points,
+            field_steps,
+        };
+        assert!(then.still_describes(&then, 0.25));
+        assert!(then.still_describes(&grown(1_250, 500), 0.25), "25 % is not more than 25 %");
+        assert!(!then.still_describes(&grown(1_251, 400), 0.25), "the cloud grew");
+        assert!(!then.still_describes(&grown(1_000, 501), 0.25), "the field trained on");
+        assert!(!then.still_describes(&grown(900, 400), 0.25), "a shrunk cloud is a change too");
+        assert!(then.still_describes(&then, 0.0), "nothing changed");
+    }
 
     #[test]
     fn sphere_rays_start_on_the_sphere_and_aim_at_the_centre() {

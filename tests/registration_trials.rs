@@ -3,7 +3,7 @@
 //! rotation error is < 5° and the centre's translation error < 3 cm, or — for symmetric
 //! designs — the aligned clean surface lies within 1 cm (mean) of the true surface.
 
-use catmap::registration::{RegistrationConfig, register_to_representative};
+use catmap::registration::{RegistrationConfig, refine_registration, register_to_representative};
 use catmap::synth::{Design, RegistrationTrial, RegistrationTrialSpec};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -63,4 +63,52 @@ fn degenerate_clouds_are_errors_not_panics() {
     let mut nan = template.clone();
     nan[3].x = f32::NAN;
     assert!(register_to_representative(&template, &nan, &cfg, &mut ChaCha8Rng::seed_from_u64(0)).is_err());
+}
+
+#[test]
+fn a_warm_start_near_the_answer_refines_back_to_the_full_search() {
+    let cfg = RegistrationConfig::default();
+    for (seed, design) in [(3u64, Design::Armchair), (4, Design::Stool), (5, Design::DiningTable)] {
+        let trial = RegistrationTrial::draw(design, &RegistrationTrialSpec::default(), seed).unwrap();
+        let full = register_to_representative(&trial.source, &trial.template, &cfg, &mut ChaCha8Rng::seed_from_u64(seed))
+            .unwrap();
+        // The previous registration of a smaller cloud: a few degrees and centimetres off.
+        let nudge = nalgebra::Isometry3::new(
+            nalgebra::Vector3::new(0.02, -0.01, 0.015),
+            nalgebra::Vector3::new(0.0, 0.0, 4f32.to_radians()),
+        );
+        let warm = refine_registration(&trial.source, &trial.template, &(nudge * full.template_from_source()), &cfg)
+            .unwrap();
+        assert!(
+            warm.score <= full.score * 1.02 + 1e-4,
+            "{}: warm {} vs full {}",
+            design.name(),
+            warm.score,
+            full.score
+        );
+        let (rotation_deg, translation_m) = trial.pose_error(&warm.template_from_source());
+        let cloud_m = trial.aligned_cloud_distance(&warm.template_from_source()).unwrap();
+        assert!(
+            (rotation_deg < 5.0 && translation_m < 0.03) || cloud_m < 0.01,
+            "{}: {rotation_deg:.1}°, {translation_m:.3} m",
+            design.name()
+        );
+    }
+}
+
+#[test]
+fn a_warm_start_far_from_the_answer_scores_worse_than_the_search() {
+    let cfg = RegistrationConfig::default();
+    let trial = RegistrationTrial::draw(Design::Armchair, &RegistrationTrialSpec::default(), 11).unwrap();
+    let full =
+        register_to_representative(&trial.source, &trial.template, &cfg, &mut ChaCha8Rng::seed_from_u64(11)).unwrap();
+    let turned = nalgebra::Isometry3::rotation(nalgebra::Vector3::new(0.0, 0.0, std::f32::consts::PI));
+    let warm = refine_registration(&trial.source, &trial.template, &(turned * full.template_from_source()), &cfg)
+        .unwrap();
+    assert!(
+        warm.score > full.score * 1.1,
+        "a half-turned start stays in its basin: warm {} vs full {}",
+        warm.score,
+        full.score
+    );
 }

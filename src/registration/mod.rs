@@ -32,4 +32,4 @@ pub use chamfer::{normalised_one_way_chamfer, one_way_chamfer};
 pub use cloud::voxel_centroids;
 pub use config::{FrontEnd, RegistrationConfig};
 pub use cube_rotations::cube_rotations;
-pub use register::{Registration, RegistrationTrace, RobustTrace, register_to_representative};
+pub use register::{Registration, RegistrationTrace, RobustTrace, refine_registration, register_to_representative};

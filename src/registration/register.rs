@@ -165,6 +165,52 @@ pub fn register_to_representative<R: Rng + ?Sized>(
     })
 }
 
+/// Refines a known alignment of `source` to `template` — a warm start, e.g. the pose of the
+/// previous registration of the same pair — by step 3 of the module doc alone (no search);
+/// the score is the same as [`register_to_representative`]'s, so the two can be compared.
+pub fn refine_registration(
+    source: &[Point3<f32>],
+    template: &[Point3<f32>],
+    template_from_source: &Isometry3<f32>,
+    cfg: &RegistrationConfig,
+) -> Result<Registration> {
+    check_cloud(source, "source", 3)?;
+    check_cloud(template, "template", 3)?;
+    let fine = Level::new(source, template, cfg.icp_voxel_m)?;
+    let stage = |gate: f32| IcpParams {
+        max_correspondence_m: gate,
+        max_iterations: cfg.refine_iterations,
+        keep_fraction: cfg.keep_fraction,
+    };
+    let start: Isometry3<f64> = template_from_source.cast();
+    let pose = cfg
+        .refine_gates_m
+        .iter()
+        .fold(start, |pose, &gate| fine.refine(pose, &stage(gate)));
+    let pose = fine.refine(
+        pose,
+        &IcpParams {
+            max_correspondence_m: cfg.icp_max_correspondence_m,
+            max_iterations: cfg.icp_max_iterations,
+            keep_fraction: 1.0,
+        },
+    );
+    let aligned: Vec<Point3<f32>> = source.iter().map(|p| (pose * p.cast()).cast()).collect();
+    let score = normalised_one_way_chamfer(&aligned, template)?;
+    Ok(Registration {
+        rotation: pose.rotation.to_rotation_matrix().cast(),
+        translation: pose.translation.vector.cast(),
+        score,
+        start_index: 0,
+        trace: RegistrationTrace {
+            fine_points: (fine.source.len(), fine.template.len()),
+            starts: 1,
+            refined: vec![(0, fine.score(&pose, 1.0))],
+            ..RegistrationTrace::default()
+        },
+    })
+}
+
 /// The source and template thinned to one voxel size, with the template indexed.
 struct Level {
     source: Vec<Point3<f32>>,

@@ -135,9 +135,15 @@ pub struct FieldMesh {
     pub from_category: bool,
 }
 
-/// The object's uncertainty sphere at its class's latest registration.
+/// The object's uncertainty sphere as its class's latest registration used it, and what it was
+/// evaluated on (it is evaluated again only after material growth).
 #[derive(Component, Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Reliability(pub catmap::uncertainty::ObjectReliability);
+pub struct Reliability {
+    /// The evaluated sphere.
+    pub sphere: catmap::uncertainty::ObjectReliability,
+    /// The cloud and field it was evaluated on.
+    pub stamp: catmap::uncertainty::UncertaintyStamp,
+}
 
 /// The object's place in its class: subcategory, representative, alignment and NOCS frame.
 #[derive(Component, Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]

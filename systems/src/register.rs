@@ -6,10 +6,10 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use bevy_ecs::prelude::*;
-use catmap::class_registration::{MemberInput, register_class};
+use catmap::class_registration::{MemberInput, RegisteredSubcategory, class_is_due, register_class};
 use catmap::mesh::Aabb;
 use catmap::rng::{RngStream, seeded_rng};
-use catmap::uncertainty::object_reliability;
+use catmap::uncertainty::{UncertaintyStamp, object_reliability};
 use catmap::{ClassId, ObjectId};
 use nalgebra::Point3;
 use rayon::prelude::*;
@@ -23,14 +23,18 @@ use crate::resources::{Fields, ObjectIndex, Settings, StageTimes};
 struct Ready {
     entity: Entity,
     id: ObjectId,
-    cloud_len: usize,
     cloud: Vec<Point3<f32>>,
     bounds: catmap::oriented_box::OrientedBox,
     slot: FieldSlot,
+    stamp: UncertaintyStamp,
+    /// Its sphere from an earlier registration, if one was evaluated.
+    stored: Option<Reliability>,
 }
 
 /// Re-registers every class whose membership changed or whose members' clouds grew by more than
-/// `categories.reregister_growth` since its last registration (classes in id order).
+/// `categories.reregister_growth` since its last registration (classes in id order). A member's
+/// uncertainty sphere is evaluated again only when its cloud or field changed materially; pairs
+/// registered before start from their previous alignment.
 pub fn register_categories(
     settings: Res<Settings>,
     fields: Res<Fields>,
@@ -42,6 +46,7 @@ pub fn register_categories(
         Option<&ObjectBounds>,
         Option<&FieldSlot>,
         Option<&FieldLoss>,
+        Option<&Reliability>,
     )>,
     mut times: ResMut<StageTimes>,
     mut commands: Commands,
@@ -51,11 +56,11 @@ pub fn register_categories(
         return;
     }
     let steps_needed = cfg.field_steps_before_registration(&settings.0.fields);
-    let mut due: Vec<(Entity, ClassId, Vec<Ready>)> = Vec::new();
+    let mut due: Vec<(Entity, ClassId, Vec<Ready>, Vec<RegisteredSubcategory>)> = Vec::new();
     for (entity, category, previous) in &categories {
         let mut ready = Vec::new();
         for id in &category.members {
-            let Some((object, cloud, Some(bounds), Some(slot), Some(loss))) =
+            let Some((object, cloud, Some(bounds), Some(slot), Some(loss), stored)) =
                 index.0.get(id).and_then(|e| objects.get(*e).ok())
             else {
                 break;
@@ -66,54 +71,62 @@ pub fn register_categories(
             ready.push(Ready {
                 entity: index.0[&object.id],
                 id: object.id,
-                cloud_len: cloud.0.len(),
                 cloud: Vec::new(), // filled only when the class is due
                 bounds: bounds.oriented_box,
                 slot: *slot,
+                stamp: UncertaintyStamp {
+                    cloud_points: cloud.0.len(),
+                    field_steps: loss.steps,
+                },
+                stored: stored.cloned(),
             });
         }
         if ready.len() < category.members.len() {
             continue; // wait until every member has a trained field
         }
-        let stale = previous.is_none_or(|p| {
-            p.registered_points.len() != ready.len()
-                || ready.iter().any(|r| {
-                    p.registered_points
-                        .get(&r.id)
-                        .is_none_or(|&n| r.cloud_len as f64 > n as f64 * (1.0 + f64::from(cfg.reregister_growth)))
-                })
-        });
-        if stale {
+        let sizes: Vec<(ObjectId, usize)> = ready.iter().map(|r| (r.id, r.stamp.cloud_points)).collect();
+        if class_is_due(previous.as_ref().map(|p| &p.registered_points), &sizes, cfg.reregister_growth) {
             for r in &mut ready {
                 if let Ok((_, cloud, ..)) = objects.get(r.entity) {
                     r.cloud = cloud.0.points();
                 }
             }
-            due.push((entity, category.class, ready));
+            let previous_groups = previous.map_or_else(Vec::new, |p| p.groups.clone());
+            due.push((entity, category.class, ready, previous_groups));
         }
     }
     if due.is_empty() {
         return;
     }
     let seed = settings.0.seed;
-    for (category_entity, class, ready) in due {
-        // Uncertainty spheres (only needed to rank several members).
+    for (category_entity, class, ready, previous_groups) in due {
+        // Uncertainty spheres (only needed to rank several members; kept while they still hold).
         let started = Instant::now();
-        let reliabilities: Vec<_> = if ready.len() > 1 {
+        let reliabilities: Vec<Option<Reliability>> = if ready.len() > 1 {
             ready
                 .par_iter()
                 .map(|r| {
+                    if let Some(stored) = r.stored.as_ref().filter(|s| {
+                        s.stamp
+                            .still_describes(&r.stamp, cfg.uncertainty_refresh_growth)
+                    }) {
+                        return Some(stored.clone());
+                    }
                     let field = fields.objects.field(r.slot.index)?;
                     // The sphere around the observed cloud's world-axis box (METHOD.md §3).
                     let aabb = Aabb::from_points(&r.cloud)?;
                     let mut rng = seeded_rng(seed, RngStream::ObjectField(r.id));
-                    Some(object_reliability(
+                    let sphere = object_reliability(
                         &aabb.center(),
                         &(aabb.extent() * 0.5),
                         &cfg.uncertainty,
                         &mut rng,
                         |points| field.eval_alpha_world(&r.slot.origin, points),
-                    ))
+                    );
+                    Some(Reliability {
+                        sphere,
+                        stamp: r.stamp,
+                    })
                 })
                 .collect()
         } else {
@@ -128,11 +141,11 @@ pub fn register_categories(
                 id: r.id,
                 cloud: r.cloud.clone(),
                 bounds: r.bounds,
-                reliable_rays: rel.as_ref().map_or(0, |x| x.reliable_rays),
+                reliable_rays: rel.as_ref().map_or(0, |x| x.sphere.reliable_rays),
             })
             .collect();
         let class_seed = seed ^ (u64::from(class.0) << 32);
-        let registered = register_class(&inputs, cfg, class_seed);
+        let registered = register_class(&inputs, &previous_groups, cfg, class_seed);
         times.add("register", started.elapsed());
         let groups = match registered {
             Ok(groups) => groups,
@@ -142,8 +155,10 @@ pub fn register_categories(
             }
         };
         for (r, rel) in ready.iter().zip(reliabilities) {
-            if let Some(reliability) = rel {
-                commands.entity(r.entity).insert(Reliability(reliability));
+            if let Some(reliability) = rel
+                && r.stored.as_ref() != Some(&reliability)
+            {
+                commands.entity(r.entity).insert(reliability);
             }
         }
         for (k, group) in groups.iter().enumerate() {
@@ -163,7 +178,8 @@ pub fn register_categories(
             .map(|g| (g.representative, g.members.keys().copied().collect()))
             .collect();
         tracing::info!(class = %class, subcategories = ?summary, "class registered");
-        let registered_points: BTreeMap<ObjectId, usize> = ready.iter().map(|r| (r.id, r.cloud_len)).collect();
+        let registered_points: BTreeMap<ObjectId, usize> =
+            ready.iter().map(|r| (r.id, r.stamp.cloud_points)).collect();
         let record = Subcategories {
             groups,
             registered_points,
