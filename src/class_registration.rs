@@ -343,24 +343,23 @@ mod tests {
             .collect()
     }
 
+    fn starting(registration_start: RegistrationStart) -> CategoryConfig {
+        CategoryConfig {
+            registration_start,
+            ..CategoryConfig::default()
+        }
+    }
+
     #[test]
     fn a_warm_re_registration_keeps_the_full_searchs_groups_and_scores() {
         let members = three_members();
-        let search = CategoryConfig {
-            registration_start: RegistrationStart::Search,
-            ..CategoryConfig::default()
-        };
-        let first = register_class(&members, &[], &search, 7).unwrap();
+        let first = register_class(&members, &[], &starting(RegistrationStart::Search), 7).unwrap();
         assert_eq!(
             groups(&first),
             vec![(ObjectId(1), vec![ObjectId(1), ObjectId(2)]), (ObjectId(3), vec![ObjectId(3)])],
             "the chair copies share a subcategory, the table does not"
         );
-        let warm = CategoryConfig {
-            registration_start: RegistrationStart::Warm,
-            ..CategoryConfig::default()
-        };
-        let again = register_class(&members, &first, &warm, 7).unwrap();
+        let again = register_class(&members, &first, &starting(RegistrationStart::Warm), 7).unwrap();
         assert_eq!(groups(&again), groups(&first));
         let (cold, warm) = (
             first[0].members[&ObjectId(2)].alignment.chamfer,
@@ -375,21 +374,13 @@ mod tests {
     #[test]
     fn a_warm_start_that_scores_worse_falls_back_to_the_full_search() {
         let members = three_members();
-        let search = CategoryConfig {
-            registration_start: RegistrationStart::Search,
-            ..CategoryConfig::default()
-        };
-        let first = register_class(&members, &[], &search, 7).unwrap();
+        let first = register_class(&members, &[], &starting(RegistrationStart::Search), 7).unwrap();
         // A stored alignment half a turn off, with the good score: the warm start cannot reach it.
         let mut wrong = first.clone();
         let member = wrong[0].members.get_mut(&ObjectId(2)).unwrap();
         member.alignment.template_from_object =
             Isometry3::rotation(nalgebra::Vector3::new(0.0, 0.0, std::f32::consts::PI)) * member.alignment.template_from_object;
-        let warm = CategoryConfig {
-            registration_start: RegistrationStart::Warm,
-            ..CategoryConfig::default()
-        };
-        let again = register_class(&members, &wrong, &warm, 7).unwrap();
+        let again = register_class(&members, &wrong, &starting(RegistrationStart::Warm), 7).unwrap();
         assert_eq!(groups(&again), groups(&first));
         assert_eq!(
             again[0].members[&ObjectId(2)].alignment.chamfer,

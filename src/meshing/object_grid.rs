@@ -339,7 +339,7 @@ mod tests {
     fn coarse_to_fine_gives_the_dense_mesh_with_fewer_evaluations() {
         let frame = tilted_frame(Vector3::new(0.5, 0.5, 0.5));
         let centre = frame.world_from_object * Point3::new(0.0, 0.0, 0.05);
-        let mut run = |coarse_block: usize| {
+        let run = |coarse_block: usize| {
             let cfg = ObjectMeshConfig {
                 coarse_block,
                 ..ObjectMeshConfig::default()

@@ -130,31 +130,21 @@ pub fn register_to_representative<R: Rng + ?Sized>(
         })
         .collect();
     let chosen = distinct_best(&coarse_fits, cfg.refined_candidates.max(1));
-    let final_stage = IcpParams {
-        max_correspondence_m: cfg.icp_max_correspondence_m,
-        max_iterations: cfg.icp_max_iterations,
-        keep_fraction: 1.0,
-    };
     let mut refined: Vec<(usize, Isometry3<f64>, f32)> = chosen
         .par_iter()
         .map(|&k| {
-            let pose = cfg.refine_gates_m.iter().fold(coarse_fits[k].0, |pose, &gate| {
-                fine.refine(pose, &stage(gate, cfg.refine_iterations))
-            });
-            let pose = fine.refine(pose, &final_stage);
+            let pose = fine.refine_fully(coarse_fits[k].0, cfg);
             (k, pose, fine.score(&pose, 1.0))
         })
         .collect();
     refined.sort_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)));
     let (start_index, pose, _) = refined[0];
-    let aligned: Vec<Point3<f32>> = source.iter().map(|p| (pose * p.cast()).cast()).collect();
-    let score = normalised_one_way_chamfer(&aligned, template)?;
-    Ok(Registration {
-        rotation: pose.rotation.to_rotation_matrix().cast(),
-        translation: pose.translation.vector.cast(),
-        score,
+    finished(
+        source,
+        template,
+        &pose,
         start_index,
-        trace: RegistrationTrace {
+        RegistrationTrace {
             coarse_points: (coarse.source.len(), coarse.template.len()),
             fine_points: (fine.source.len(), fine.template.len()),
             starts: starts.len(),
@@ -162,6 +152,25 @@ pub fn register_to_representative<R: Rng + ?Sized>(
             coarse_scores: coarse_fits.iter().map(|f| f.1).collect(),
             refined: refined.iter().map(|r| (r.0, r.2)).collect(),
         },
+    )
+}
+
+/// The registration at `pose`, scored by METHOD's normalised one-way Chamfer distance of the whole
+/// aligned source to the whole template.
+fn finished(
+    source: &[Point3<f32>],
+    template: &[Point3<f32>],
+    pose: &Isometry3<f64>,
+    start_index: usize,
+    trace: RegistrationTrace,
+) -> Result<Registration> {
+    let aligned: Vec<Point3<f32>> = source.iter().map(|p| (pose * p.cast()).cast()).collect();
+    Ok(Registration {
+        rotation: pose.rotation.to_rotation_matrix().cast(),
+        translation: pose.translation.vector.cast(),
+        score: normalised_one_way_chamfer(&aligned, template)?,
+        start_index,
+        trace,
     })
 }
 
@@ -177,38 +186,14 @@ pub fn refine_registration(
     check_cloud(source, "source", 3)?;
     check_cloud(template, "template", 3)?;
     let fine = Level::new(source, template, cfg.icp_voxel_m)?;
-    let stage = |gate: f32| IcpParams {
-        max_correspondence_m: gate,
-        max_iterations: cfg.refine_iterations,
-        keep_fraction: cfg.keep_fraction,
+    let pose = fine.refine_fully(template_from_source.cast(), cfg);
+    let trace = RegistrationTrace {
+        fine_points: (fine.source.len(), fine.template.len()),
+        starts: 1,
+        refined: vec![(0, fine.score(&pose, 1.0))],
+        ..RegistrationTrace::default()
     };
-    let start: Isometry3<f64> = template_from_source.cast();
-    let pose = cfg
-        .refine_gates_m
-        .iter()
-        .fold(start, |pose, &gate| fine.refine(pose, &stage(gate)));
-    let pose = fine.refine(
-        pose,
-        &IcpParams {
-            max_correspondence_m: cfg.icp_max_correspondence_m,
-            max_iterations: cfg.icp_max_iterations,
-            keep_fraction: 1.0,
-        },
-    );
-    let aligned: Vec<Point3<f32>> = source.iter().map(|p| (pose * p.cast()).cast()).collect();
-    let score = normalised_one_way_chamfer(&aligned, template)?;
-    Ok(Registration {
-        rotation: pose.rotation.to_rotation_matrix().cast(),
-        translation: pose.translation.vector.cast(),
-        score,
-        start_index: 0,
-        trace: RegistrationTrace {
-            fine_points: (fine.source.len(), fine.template.len()),
-            starts: 1,
-            refined: vec![(0, fine.score(&pose, 1.0))],
-            ..RegistrationTrace::default()
-        },
-    })
+    finished(source, template, &pose, 0, trace)
 }
 
 /// The source and template thinned to one voxel size, with the template indexed.
@@ -230,6 +215,28 @@ impl Level {
 
     fn refine(&self, pose: Isometry3<f64>, params: &IcpParams) -> Isometry3<f64> {
         icp_point_to_point(&self.source, &self.template, &self.index, pose, params).template_from_source
+    }
+
+    /// Step 3 of the module doc from `start`: trimmed ICP at the `refine_gates_m`, then plain ICP.
+    fn refine_fully(&self, start: Isometry3<f64>, cfg: &RegistrationConfig) -> Isometry3<f64> {
+        let pose = cfg.refine_gates_m.iter().fold(start, |pose, &gate| {
+            self.refine(
+                pose,
+                &IcpParams {
+                    max_correspondence_m: gate,
+                    max_iterations: cfg.refine_iterations,
+                    keep_fraction: cfg.keep_fraction,
+                },
+            )
+        });
+        self.refine(
+            pose,
+            &IcpParams {
+                max_correspondence_m: cfg.icp_max_correspondence_m,
+                max_iterations: cfg.icp_max_iterations,
+                keep_fraction: 1.0,
+            },
+        )
     }
 
     fn score(&self, pose: &Isometry3<f64>, keep_fraction: f32) -> f32 {
