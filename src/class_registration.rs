@@ -298,10 +298,19 @@ mod tests {
         let (a, b, c) = (ObjectId(1), ObjectId(2), ObjectId(3));
         let then = BTreeMap::from([(a, 1_000), (b, 500)]);
         assert!(class_is_due(None, &[(a, 10)], 0.2), "never registered");
-        assert!(!class_is_due(Some(&then), &[(a, 1_200), (b, 500)], 0.2), "20 % is not more than 20 %");
+        assert!(
+            !class_is_due(Some(&then), &[(a, 1_200), (b, 500)], 0.2),
+            "20 % is not more than 20 %"
+        );
         assert!(class_is_due(Some(&then), &[(a, 1_000), (b, 601)], 0.2), "a cloud grew");
-        assert!(class_is_due(Some(&then), &[(a, 1_000), (b, 500), (c, 10)], 0.2), "a member joined");
-        assert!(class_is_due(Some(&then), &[(a, 1_000), (c, 500)], 0.2), "a member was replaced");
+        assert!(
+            class_is_due(Some(&then), &[(a, 1_000), (b, 500), (c, 10)], 0.2),
+            "a member joined"
+        );
+        assert!(
+            class_is_due(Some(&then), &[(a, 1_000), (c, 500)], 0.2),
+            "a member was replaced"
+        );
     }
 
     #[test]
@@ -322,18 +331,22 @@ mod tests {
             visible: (0.7, 0.8),
             ..RegistrationTrialSpec::default()
         };
-        [(1, Design::LadderBackChair, 1), (2, Design::LadderBackChair, 2), (3, Design::DiningTable, 3)]
-            .into_iter()
-            .map(|(id, design, seed)| {
-                let trial = RegistrationTrial::draw(design, &spec, seed).unwrap();
-                MemberInput {
-                    id: ObjectId(id),
-                    bounds: fit_minimum_volume_box(&trial.source).unwrap(),
-                    cloud: trial.source,
-                    reliable_rays: 10 - id as usize,
-                }
-            })
-            .collect()
+        [
+            (1, Design::LadderBackChair, 1),
+            (2, Design::LadderBackChair, 2),
+            (3, Design::DiningTable, 3),
+        ]
+        .into_iter()
+        .map(|(id, design, seed)| {
+            let trial = RegistrationTrial::draw(design, &spec, seed).unwrap();
+            MemberInput {
+                id: ObjectId(id),
+                bounds: fit_minimum_volume_box(&trial.source).unwrap(),
+                cloud: trial.source,
+                reliable_rays: 10 - id as usize,
+            }
+        })
+        .collect()
     }
 
     fn groups(registered: &[RegisteredSubcategory]) -> Vec<(ObjectId, Vec<ObjectId>)> {
@@ -356,7 +369,10 @@ mod tests {
         let first = register_class(&members, &[], &starting(RegistrationStart::Search), 7).unwrap();
         assert_eq!(
             groups(&first),
-            vec![(ObjectId(1), vec![ObjectId(1), ObjectId(2)]), (ObjectId(3), vec![ObjectId(3)])],
+            vec![
+                (ObjectId(1), vec![ObjectId(1), ObjectId(2)]),
+                (ObjectId(3), vec![ObjectId(3)])
+            ],
             "the chair copies share a subcategory, the table does not"
         );
         let again = register_class(&members, &first, &starting(RegistrationStart::Warm), 7).unwrap();
@@ -379,7 +395,8 @@ mod tests {
         let mut wrong = first.clone();
         let member = wrong[0].members.get_mut(&ObjectId(2)).unwrap();
         member.alignment.template_from_object =
-            Isometry3::rotation(nalgebra::Vector3::new(0.0, 0.0, std::f32::consts::PI)) * member.alignment.template_from_object;
+            Isometry3::rotation(nalgebra::Vector3::new(0.0, 0.0, std::f32::consts::PI))
+                * member.alignment.template_from_object;
         let again = register_class(&members, &wrong, &starting(RegistrationStart::Warm), 7).unwrap();
         assert_eq!(groups(&again), groups(&first));
         assert_eq!(

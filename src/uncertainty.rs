@@ -240,10 +240,16 @@ mod tests {
             field_steps,
         };
         assert!(then.still_describes(&then, 0.25));
-        assert!(then.still_describes(&grown(1_250, 500), 0.25), "25 % is not more than 25 %");
+        assert!(
+            then.still_describes(&grown(1_250, 500), 0.25),
+            "25 % is not more than 25 %"
+        );
         assert!(!then.still_describes(&grown(1_251, 400), 0.25), "the cloud grew");
         assert!(!then.still_describes(&grown(1_000, 501), 0.25), "the field trained on");
-        assert!(!then.still_describes(&grown(900, 400), 0.25), "a shrunk cloud is a change too");
+        assert!(
+            !then.still_describes(&grown(900, 400), 0.25),
+            "a shrunk cloud is a change too"
+        );
         assert!(then.still_describes(&then, 0.0), "nothing changed");
     }
 

@@ -70,15 +70,25 @@ fn a_warm_start_near_the_answer_refines_back_to_the_full_search() {
     let cfg = RegistrationConfig::default();
     for (seed, design) in [(3u64, Design::Armchair), (4, Design::Stool), (5, Design::DiningTable)] {
         let trial = RegistrationTrial::draw(design, &RegistrationTrialSpec::default(), seed).unwrap();
-        let full = register_to_representative(&trial.source, &trial.template, &cfg, &mut ChaCha8Rng::seed_from_u64(seed))
-            .unwrap();
+        let full = register_to_representative(
+            &trial.source,
+            &trial.template,
+            &cfg,
+            &mut ChaCha8Rng::seed_from_u64(seed),
+        )
+        .unwrap();
         // The previous registration of a smaller cloud: a few degrees and centimetres off.
         let nudge = nalgebra::Isometry3::new(
             nalgebra::Vector3::new(0.02, -0.01, 0.015),
             nalgebra::Vector3::new(0.0, 0.0, 4f32.to_radians()),
         );
-        let warm = refine_registration(&trial.source, &trial.template, &(nudge * full.template_from_source()), &cfg)
-            .unwrap();
+        let warm = refine_registration(
+            &trial.source,
+            &trial.template,
+            &(nudge * full.template_from_source()),
+            &cfg,
+        )
+        .unwrap();
         assert!(
             warm.score <= full.score * 1.02 + 1e-4,
             "{}: warm {} vs full {}",
@@ -103,8 +113,13 @@ fn a_warm_start_far_from_the_answer_scores_worse_than_the_search() {
     let full =
         register_to_representative(&trial.source, &trial.template, &cfg, &mut ChaCha8Rng::seed_from_u64(11)).unwrap();
     let turned = nalgebra::Isometry3::rotation(nalgebra::Vector3::new(0.0, 0.0, std::f32::consts::PI));
-    let warm = refine_registration(&trial.source, &trial.template, &(turned * full.template_from_source()), &cfg)
-        .unwrap();
+    let warm = refine_registration(
+        &trial.source,
+        &trial.template,
+        &(turned * full.template_from_source()),
+        &cfg,
+    )
+    .unwrap();
     assert!(
         warm.score > full.score * 1.1,
         "a half-turned start stays in its basin: warm {} vs full {}",

@@ -41,10 +41,7 @@ fn axis_places(coarse: &[usize]) -> Vec<AxisPlace> {
     (0..samples)
         .map(|i| {
             // The block whose span [coarse[b], coarse[b + 1]] holds i, the lower one on a border.
-            let b = coarse
-                .partition_point(|&c| c <= i)
-                .saturating_sub(1)
-                .min(blocks - 1);
+            let b = coarse.partition_point(|&c| c <= i).saturating_sub(1).min(blocks - 1);
             let (start, end) = (coarse[b], coarse.get(b + 1).copied().unwrap_or(coarse[b]));
             let along = if end > start {
                 (i - start) as f32 / (end - start) as f32
@@ -86,7 +83,8 @@ impl CoarseToFine {
         let axes = coarse.axes;
         let blocks = [0, 1, 2].map(|k| axes[k].len().saturating_sub(1).max(1));
         let n = [axes[0].len(), axes[1].len(), axes[2].len()];
-        let value = |i: usize, j: usize, k: usize| values[i.min(n[0] - 1) + n[0] * (j.min(n[1] - 1) + n[1] * k.min(n[2] - 1))];
+        let value =
+            |i: usize, j: usize, k: usize| values[i.min(n[0] - 1) + n[0] * (j.min(n[1] - 1) + n[1] * k.min(n[2] - 1))];
         let mut crossed = vec![false; blocks.iter().product()];
         for bz in 0..blocks[2] {
             for by in 0..blocks[1] {
@@ -137,9 +135,8 @@ impl CoarseToFine {
     /// Whether fine sample `(i, j, k)` must be evaluated: it belongs to a refined block.
     pub fn must_evaluate(&self, i: usize, j: usize, k: usize) -> bool {
         let [px, py, pz] = [&self.places[0][i], &self.places[1][j], &self.places[2][k]];
-        (pz.first..=pz.last).any(|z| {
-            (py.first..=py.last).any(|y| (px.first..=px.last).any(|x| self.is_refined(x, y, z)))
-        })
+        (pz.first..=pz.last)
+            .any(|z| (py.first..=py.last).any(|y| (px.first..=px.last).any(|x| self.is_refined(x, y, z))))
     }
 
     /// The stand-in value of fine sample `(i, j, k)`: the trilinear interpolation of its block's
@@ -147,7 +144,9 @@ impl CoarseToFine {
     pub fn interpolated(&self, i: usize, j: usize, k: usize) -> f32 {
         let [px, py, pz] = [&self.places[0][i], &self.places[1][j], &self.places[2][k]];
         let n = [self.coarse[0].len(), self.coarse[1].len(), self.coarse[2].len()];
-        let at = |x: usize, y: usize, z: usize| self.values[x.min(n[0] - 1) + n[0] * (y.min(n[1] - 1) + n[1] * z.min(n[2] - 1))];
+        let at = |x: usize, y: usize, z: usize| {
+            self.values[x.min(n[0] - 1) + n[0] * (y.min(n[1] - 1) + n[1] * z.min(n[2] - 1))]
+        };
         let (bx, by, bz) = (px.last, py.last, pz.last);
         let (tx, ty, tz) = (
             if px.first < px.last { 0.0 } else { px.along },
@@ -200,10 +199,45 @@ mod tests {
     #[test]
     fn a_sample_on_a_block_border_belongs_to_both_blocks() {
         let places = axis_places(&[0, 4, 8, 9]);
-        assert_eq!(places[0], AxisPlace { first: 0, last: 0, along: 0.0 });
-        assert_eq!(places[2], AxisPlace { first: 0, last: 0, along: 0.5 });
-        assert_eq!(places[4], AxisPlace { first: 0, last: 1, along: 0.0 });
-        assert_eq!(places[8], AxisPlace { first: 1, last: 2, along: 0.0 });
-        assert_eq!(places[9], AxisPlace { first: 2, last: 2, along: 1.0 });
+        assert_eq!(
+            places[0],
+            AxisPlace {
+                first: 0,
+                last: 0,
+                along: 0.0
+            }
+        );
+        assert_eq!(
+            places[2],
+            AxisPlace {
+                first: 0,
+                last: 0,
+                along: 0.5
+            }
+        );
+        assert_eq!(
+            places[4],
+            AxisPlace {
+                first: 0,
+                last: 1,
+                along: 0.0
+            }
+        );
+        assert_eq!(
+            places[8],
+            AxisPlace {
+                first: 1,
+                last: 2,
+                along: 0.0
+            }
+        );
+        assert_eq!(
+            places[9],
+            AxisPlace {
+                first: 2,
+                last: 2,
+                along: 1.0
+            }
+        );
     }
 }

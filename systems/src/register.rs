@@ -85,7 +85,11 @@ pub fn register_categories(
             continue; // wait until every member has a trained field
         }
         let sizes: Vec<(ObjectId, usize)> = ready.iter().map(|r| (r.id, r.stamp.cloud_points)).collect();
-        if class_is_due(previous.as_ref().map(|p| &p.registered_points), &sizes, cfg.reregister_growth) {
+        if class_is_due(
+            previous.as_ref().map(|p| &p.registered_points),
+            &sizes,
+            cfg.reregister_growth,
+        ) {
             for r in &mut ready {
                 if let Ok((_, cloud, ..)) = objects.get(r.entity) {
                     r.cloud = cloud.0.points();
@@ -106,10 +110,11 @@ pub fn register_categories(
             ready
                 .par_iter()
                 .map(|r| {
-                    if let Some(stored) = r.stored.as_ref().filter(|s| {
-                        s.stamp
-                            .still_describes(&r.stamp, cfg.uncertainty_refresh_growth)
-                    }) {
+                    if let Some(stored) = r
+                        .stored
+                        .as_ref()
+                        .filter(|s| s.stamp.still_describes(&r.stamp, cfg.uncertainty_refresh_growth))
+                    {
                         return Some(stored.clone());
                     }
                     let field = fields.objects.field(r.slot.index)?;
@@ -123,10 +128,7 @@ pub fn register_categories(
                         &mut rng,
                         |points| field.eval_alpha_world(&r.slot.origin, points),
                     );
-                    Some(Reliability {
-                        sphere,
-                        stamp: r.stamp,
-                    })
+                    Some(Reliability { sphere, stamp: r.stamp })
                 })
                 .collect()
         } else {
@@ -178,8 +180,7 @@ pub fn register_categories(
             .map(|g| (g.representative, g.members.keys().copied().collect()))
             .collect();
         tracing::info!(class = %class, subcategories = ?summary, "class registered");
-        let registered_points: BTreeMap<ObjectId, usize> =
-            ready.iter().map(|r| (r.id, r.stamp.cloud_points)).collect();
+        let registered_points: BTreeMap<ObjectId, usize> = ready.iter().map(|r| (r.id, r.stamp.cloud_points)).collect();
         let record = Subcategories {
             groups,
             registered_points,
