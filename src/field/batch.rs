@@ -15,7 +15,7 @@ use super::object_field::OccupancyField;
 use super::occupancy::{OccupancyNet, OccupancyScratch};
 use super::samples::SampleBatch;
 use super::simd::Backend;
-use super::tasks::{Task, TaskPool, plan_tasks, tasks_by_field};
+use super::tasks::{Task, TaskPool, plan_tasks, tasks_by_field, update_active};
 use crate::error::{CatmapError, Result};
 
 /// Target samples per chunk.
@@ -112,14 +112,7 @@ impl FieldBatch {
     pub fn train_step_of(&mut self, active: &[usize], batch: &SampleBatch) -> Result<Vec<FieldLosses>> {
         let losses = self.compute_gradients(active, batch)?;
         let optim = self.optim;
-        let grads = &self.grads;
-        let mut updates: Vec<(&mut OccupancyField, &Vec<f32>)> = self
-            .fields
-            .iter_mut()
-            .enumerate()
-            .filter_map(|(i, field)| active.binary_search(&i).ok().map(|k| (field, &grads[k])))
-            .collect();
-        updates.par_iter_mut().for_each(|(field, grad)| {
+        update_active(&mut self.fields, active, &self.grads, |field, grad| {
             let (params, state) = field.params_and_state_mut();
             state.update(&optim, params, grad);
         });

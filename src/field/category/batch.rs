@@ -14,7 +14,7 @@ use super::super::adamw::AdamWConfig;
 use super::super::batch::CHUNK_SAMPLES;
 use super::super::loss::{FieldLosses, LossNorm};
 use super::super::simd::Backend;
-use super::super::tasks::{Task, TaskPool, plan_tasks, tasks_by_field};
+use super::super::tasks::{Task, TaskPool, plan_tasks, tasks_by_field, update_active};
 use super::model::CategoryField;
 use super::net::{CategoryNet, CategoryScratch};
 use super::train::ChunkInputs;
@@ -125,14 +125,7 @@ impl CategoryBatch {
     pub fn train_step_of(&mut self, active: &[usize], samples: &[CategorySamples]) -> Result<Vec<CategoryLosses>> {
         let losses = self.compute_gradients(active, samples)?;
         let optim = self.optim;
-        let grads = &self.grads;
-        let mut updates: Vec<(&mut CategoryField, &CategoryGradients)> = self
-            .fields
-            .iter_mut()
-            .enumerate()
-            .filter_map(|(i, field)| active.binary_search(&i).ok().map(|k| (field, &grads[k])))
-            .collect();
-        updates.par_iter_mut().for_each(|(field, grad)| {
+        update_active(&mut self.fields, active, &self.grads, |field, grad| {
             let ((params, state), codes) = field.states_mut();
             state.update(&optim, params, &grad.weights);
             for ((code, state), g) in codes.into_iter().zip(&grad.codes) {
