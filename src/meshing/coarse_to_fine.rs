@@ -15,7 +15,59 @@
 //! level — a feature thinner than the coarse spacing whose field never comes near the level at a
 //! coarse sample. [`CoarseToFine`] holds the coarse values and the refined blocks.
 
+use nalgebra::Point3;
+
 use super::sample_grid::SampleGrid;
+use crate::error::Result;
+
+/// Hands `push_layer` every z-layer of `grid` in order (x fastest), calling `evaluate` (points in
+/// the grid's frame) only at the coarse samples and in the refined blocks (see the module doc).
+pub fn sample_coarse_to_fine(
+    grid: &SampleGrid,
+    block: usize,
+    level: f32,
+    margin: f32,
+    mut evaluate: impl FnMut(&[Point3<f32>]) -> Result<Vec<f32>>,
+    mut push_layer: impl FnMut(&[f32]) -> Result<()>,
+) -> Result<()> {
+    let coarse = CoarseToFine::coarse_grid(grid, block);
+    let mut points = Vec::with_capacity(coarse.layer_len());
+    let mut values = Vec::with_capacity(coarse.layer_len() * coarse.axes[2].len());
+    for &k in &coarse.axes[2] {
+        points.clear();
+        for &j in &coarse.axes[1] {
+            for &i in &coarse.axes[0] {
+                points.push(grid.position(i as f64, j as f64, k as f64));
+            }
+        }
+        values.extend(evaluate(&points)?);
+    }
+    let plan = CoarseToFine::new(coarse, values, level, margin);
+    let mut layer = vec![0.0f32; grid.layer_len()];
+    let mut wanted = Vec::new();
+    for k in 0..grid.dims[2] {
+        points.clear();
+        wanted.clear();
+        for j in 0..grid.dims[1] {
+            for i in 0..grid.dims[0] {
+                let at = i + grid.dims[0] * j;
+                if plan.must_evaluate(i, j, k) {
+                    points.push(grid.position(i as f64, j as f64, k as f64));
+                    wanted.push(at);
+                } else {
+                    layer[at] = plan.interpolated(i, j, k);
+                }
+            }
+        }
+        if !points.is_empty() {
+            for (at, v) in wanted.iter().zip(evaluate(&points)?) {
+                layer[*at] = v;
+            }
+        }
+        push_layer(&layer)?;
+    }
+    Ok(())
+}
 
 /// Samples of one axis on the coarse grid: `0, block, 2·block, …` and the last sample.
 fn coarse_indices(samples: usize, block: usize) -> Vec<usize> {

@@ -10,7 +10,7 @@
 use nalgebra::{Point3, Similarity3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use super::coarse_to_fine::CoarseToFine;
+use super::coarse_to_fine::sample_coarse_to_fine;
 use super::marching_cubes::IsoSurfaceExtractor;
 use super::sample_grid::SampleGrid;
 use crate::error::{CatmapError, Result};
@@ -142,12 +142,6 @@ impl ObjectGrid {
             grid,
         })
     }
-
-    /// World positions of the samples of z-layer `k`, x fastest, into `out` (cleared first).
-    pub fn layer_positions_in_world(&self, k: usize, out: &mut Vec<Point3<f32>>) {
-        self.grid.layer_positions(k, out);
-        out.iter_mut().for_each(|p| *p = self.world_from_grid * *p);
-    }
 }
 
 /// The surface `occupancy = config.occupancy_level` of an object, in world coordinates.
@@ -183,41 +177,14 @@ pub fn extract_object_mesh(
             extractor.push_layer(&evaluate(&points)?)?;
         }
     } else {
-        let coarse = CoarseToFine::coarse_grid(&grid, config.coarse_block);
-        let mut values = Vec::with_capacity(coarse.layer_len() * coarse.axes[2].len());
-        for &k in &coarse.axes[2] {
-            points.clear();
-            for &j in &coarse.axes[1] {
-                for &i in &coarse.axes[0] {
-                    points.push(grid.position(i as f64, j as f64, k as f64));
-                }
-            }
-            values.extend(evaluate(&points)?);
-        }
-        let plan = CoarseToFine::new(coarse, values, config.occupancy_level, config.coarse_margin);
-        let mut layer = vec![0.0f32; grid.layer_len()];
-        let mut wanted = Vec::new();
-        for k in 0..grid.dims[2] {
-            points.clear();
-            wanted.clear();
-            for j in 0..grid.dims[1] {
-                for i in 0..grid.dims[0] {
-                    let at = i + grid.dims[0] * j;
-                    if plan.must_evaluate(i, j, k) {
-                        points.push(grid.position(i as f64, j as f64, k as f64));
-                        wanted.push(at);
-                    } else {
-                        layer[at] = plan.interpolated(i, j, k);
-                    }
-                }
-            }
-            if !points.is_empty() {
-                for (at, v) in wanted.iter().zip(evaluate(&points)?) {
-                    layer[*at] = v;
-                }
-            }
-            extractor.push_layer(&layer)?;
-        }
+        sample_coarse_to_fine(
+            &grid,
+            config.coarse_block,
+            config.occupancy_level,
+            config.coarse_margin,
+            &mut evaluate,
+            |layer| extractor.push_layer(layer),
+        )?;
     }
     let mut mesh = extractor.finish()?;
     mesh.transform_similarity(&object_grid.world_from_grid);
