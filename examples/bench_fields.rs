@@ -169,6 +169,31 @@ fn bench_vmap(args: &Args, background_rays: usize) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// (c) Object fields alone, as the fast schedule trains them (a few at a time): field steps/s.
+fn bench_subsets(args: &Args) -> anyhow::Result<()> {
+    let rays = 120;
+    for objects in [1usize, 2, 4, 8, 16] {
+        let mut batch = FieldBatch::new(AdamWConfig::default());
+        let mut samples = SampleBatch::default();
+        for i in 0..objects {
+            let mut rng = seeded_rng(args.seed, RngStream::Object(ObjectId(i as u32)));
+            batch.push(OccupancyField::new(32, 2.0, &mut rng));
+            samples.fields.push(RaySamples::random(&mut rng, rays, 10, 2.0, 0.0));
+        }
+        let flops = objects as f64 * field_step_flops(32, rays * 10);
+        let rate = steps_per_second(args.seconds, || {
+            batch.train_step(&samples).context("train step")?;
+            Ok(())
+        })?;
+        report(&format!(
+            "(c) {objects:2} object fields (120×10, H 32)       : {rate:8.1} steps/s  {:8.1} field steps/s  {:6.1} GFLOP/s",
+            rate * objects as f64,
+            rate * flops / 1e9
+        ));
+    }
+    Ok(())
+}
+
 fn run(args: &Args) -> anyhow::Result<()> {
     let backend = Backend::detect();
     report(&format!(
@@ -189,6 +214,7 @@ fn run(args: &Args) -> anyhow::Result<()> {
     if args.only != Only::Mlp {
         bench_vmap(args, 120)?;
         bench_vmap(args, 1200)?;
+        bench_subsets(args)?;
     }
     Ok(())
 }

@@ -268,6 +268,10 @@ impl MapperConfig {
                 )));
             }
         }
+        let plateau = &self.schedule.plateau;
+        if !(plateau.learning_rate_decay > 0.0 && plateau.learning_rate_decay <= 1.0) {
+            return bad("schedule.plateau.learning_rate_decay must be in (0, 1]");
+        }
         let m = &self.meshes;
         if !(m.object.voxel_size_m > 0.0 && m.preview_voxel_m > 0.0 && m.background_voxel_m > 0.0) {
             return bad("meshes: voxel sizes must be positive");

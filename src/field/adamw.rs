@@ -50,6 +50,34 @@ impl AdamWConfig {
     }
 }
 
+/// One optimiser per field of `active`: `base` with its learning rate multiplied by the
+/// field's scale (finite, positive; one per active field).
+pub(crate) fn scaled_optimisers(
+    base: &AdamWConfig,
+    active: &[usize],
+    learning_rate_scales: &[f32],
+) -> crate::Result<Vec<AdamWConfig>> {
+    if learning_rate_scales.len() != active.len() {
+        return Err(crate::CatmapError::Degenerate(format!(
+            "{} fields to train but {} learning-rate scales",
+            active.len(),
+            learning_rate_scales.len()
+        )));
+    }
+    if let Some(bad) = learning_rate_scales.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
+        return Err(crate::CatmapError::Degenerate(format!(
+            "learning-rate scale {bad} is not a positive number"
+        )));
+    }
+    Ok(learning_rate_scales
+        .iter()
+        .map(|&scale| AdamWConfig {
+            lr: base.lr * scale,
+            ..*base
+        })
+        .collect())
+}
+
 /// First and second moments and the step count of one field.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct AdamWState {

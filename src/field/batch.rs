@@ -15,6 +15,7 @@ use super::object_field::OccupancyField;
 use super::occupancy::{OccupancyNet, OccupancyScratch};
 use super::samples::SampleBatch;
 use super::simd::Backend;
+use super::adamw::scaled_optimisers;
 use super::tasks::{Task, TaskPool, plan_tasks, tasks_by_field, update_active};
 use crate::error::{CatmapError, Result};
 
@@ -110,11 +111,22 @@ impl FieldBatch {
     /// update. The other fields get no forward, backward or AdamW update — not even weight
     /// decay — so their weights and optimiser moments stay bit for bit as they were.
     pub fn train_step_of(&mut self, active: &[usize], batch: &SampleBatch) -> Result<Vec<FieldLosses>> {
+        self.train_step_scaled(active, &vec![1.0; active.len()], batch)
+    }
+
+    /// [`FieldBatch::train_step_of`] with field `active[k]`'s learning rate (and so its weight
+    /// decay, as in PyTorch's schedulers) multiplied by `learning_rate_scales[k]`.
+    pub fn train_step_scaled(
+        &mut self,
+        active: &[usize],
+        learning_rate_scales: &[f32],
+        batch: &SampleBatch,
+    ) -> Result<Vec<FieldLosses>> {
+        let optims = scaled_optimisers(&self.optim, active, learning_rate_scales)?;
         let losses = self.compute_gradients(active, batch)?;
-        let optim = self.optim;
-        update_active(&mut self.fields, active, &self.grads, |field, grad| {
+        update_active(&mut self.fields, active, &self.grads, |k, field, grad| {
             let (params, state) = field.params_and_state_mut();
-            state.update(&optim, params, grad);
+            state.update(&optims[k], params, grad);
         });
         Ok(losses)
     }
@@ -307,5 +319,33 @@ mod tests {
             .train_step_of(&[0, 1], &SampleBatch { fields: rays(1, 1) })
             .expect_err("one sample set for two fields");
         assert!(err.to_string().contains("samples for 1"), "{err}");
+    }
+
+    #[test]
+    fn a_scaled_step_trains_each_field_at_its_own_learning_rate() {
+        let samples = rays(4, 2);
+        let mut scaled = batch_of(2);
+        scaled
+            .train_step_scaled(&[0, 1], &[0.5, 1.0], &SampleBatch { fields: samples.clone() })
+            .expect("valid step");
+        let mut halved = FieldBatch::new(AdamWConfig {
+            lr: AdamWConfig::default().lr * 0.5,
+            ..AdamWConfig::default()
+        });
+        for field in batch_of(2).fields() {
+            halved.push(field.clone());
+        }
+        halved.train_step(&SampleBatch { fields: samples.clone() }).expect("valid step");
+        let mut full = batch_of(2);
+        full.train_step(&SampleBatch { fields: samples }).expect("valid step");
+        assert_eq!(scaled.field(0), halved.field(0), "field 0 at half the rate");
+        assert_eq!(scaled.field(1), full.field(1), "field 1 at the full rate");
+        assert_ne!(scaled.field(0), full.field(0));
+        for bad in [vec![1.0], vec![1.0, 0.0], vec![f32::NAN, 1.0]] {
+            let err = scaled
+                .train_step_scaled(&[0, 1], &bad, &SampleBatch { fields: rays(5, 2) })
+                .expect_err("bad scales");
+            assert!(err.to_string().contains("scale"), "{bad:?}: {err}");
+        }
     }
 }

@@ -8,20 +8,20 @@
 
 use rayon::prelude::*;
 
-/// Applies `update` to each field of `active` (ascending indices) with its gradient (`grads[k]`
-/// belongs to `active[k]`), in parallel; the other fields are not touched.
+/// Applies `update(k, field, gradient)` to each field of `active` (ascending indices; `k` is
+/// its position there and `grads[k]` its gradient), in parallel; the other fields are not touched.
 pub(crate) fn update_active<F: Send, G: Sync>(
     fields: &mut [F],
     active: &[usize],
     grads: &[G],
-    update: impl Fn(&mut F, &G) + Sync,
+    update: impl Fn(usize, &mut F, &G) + Sync,
 ) {
-    let mut updates: Vec<(&mut F, &G)> = fields
+    let mut updates: Vec<(usize, &mut F, &G)> = fields
         .iter_mut()
         .enumerate()
-        .filter_map(|(i, field)| active.binary_search(&i).ok().map(|k| (field, &grads[k])))
+        .filter_map(|(i, field)| active.binary_search(&i).ok().map(|k| (k, field, &grads[k])))
         .collect();
-    updates.par_iter_mut().for_each(|(field, grad)| update(field, grad));
+    updates.par_iter_mut().for_each(|(k, field, grad)| update(*k, field, grad));
 }
 
 /// One task: units `start..end` of field `field`.

@@ -3,12 +3,14 @@
 //! a category field; [`LossWindow`] tells when a loss has stopped falling.
 
 pub mod config;
+pub mod facts;
 pub mod plateau;
 pub mod scheduler;
 
 pub use config::ScheduleConfig;
-pub use plateau::{LossWindow, PlateauConfig};
-pub use scheduler::{
-    FieldFacts, FieldKey, FieldProgress, FieldRole, FieldState, LastSeen, MeshSource, PhaseEnd, SchedulePolicy,
-    Sighting, StepScheduler, StreamPhase, category_field_facts, object_field_facts,
+pub use facts::{
+    FieldFacts, FieldKey, FieldRole, LastSeen, MeshSource, Sighting, StreamPhase, category_field_facts,
+    object_field_facts,
 };
+pub use plateau::{LossWindow, PlateauConfig};
+pub use scheduler::{FieldProgress, FieldState, PhaseEnd, SchedulePolicy, StepScheduler};

@@ -18,6 +18,13 @@ pub struct PlateauConfig {
     /// The loss still falls while the newest window's mean is at least this fraction below the
     /// previous window's (0.01 = 1 %).
     pub min_relative_drop: f32,
+    /// After the stream, a field whose loss has plateaued has its learning rate multiplied by
+    /// `learning_rate_decay` and trains on, up to this many times, before it counts as
+    /// converged (0: it converges at its first plateau). The lower rate averages out the noise
+    /// of the sampled rays, which a fixed rate leaves in the surface.
+    pub learning_rate_decays: u32,
+    /// The factor of each decay (in (0, 1]).
+    pub learning_rate_decay: f32,
 }
 
 impl Default for PlateauConfig {
@@ -25,7 +32,16 @@ impl Default for PlateauConfig {
         Self {
             window_steps: 100,
             min_relative_drop: 0.01,
+            learning_rate_decays: 2,
+            learning_rate_decay: 0.3,
         }
+    }
+}
+
+impl PlateauConfig {
+    /// The learning rate's factor after `decays` decays.
+    pub fn learning_rate_scale(&self, decays: u32) -> f32 {
+        self.learning_rate_decay.powi(decays.min(i32::MAX as u32) as i32)
     }
 }
 
@@ -84,6 +100,8 @@ mod tests {
     const CFG: PlateauConfig = PlateauConfig {
         window_steps: 4,
         min_relative_drop: 0.05,
+        learning_rate_decays: 0,
+        learning_rate_decay: 1.0,
     };
 
     fn window(losses: &[f32]) -> LossWindow {

@@ -18,153 +18,9 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use super::facts::{FieldFacts, FieldKey, FieldRole, Sighting, StreamPhase};
 use super::plateau::{LossWindow, PlateauConfig};
-use crate::ids::{FrameIndex, ObjectId};
 
-/// A field the scheduler plans for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-pub enum FieldKey {
-    /// An object's own occupancy field.
-    Object(ObjectId),
-    /// A category field, by its creation number (stable while its membership changes).
-    Category(u32),
-    /// The background field.
-    Background,
-}
-
-/// What a field is for at the moment.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum FieldRole {
-    /// Its own mesh comes from it: it trains while it gains from steps.
-    Learning,
-    /// A category member's own field while the stream lasts: the category field makes the mesh;
-    /// it trains only on a new keyframe (uncertainty and re-registration read it).
-    Supporting,
-    /// It gets no steps.
-    Frozen,
-}
-
-/// What this tick's frames showed of a field.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Sighting {
-    /// Not in this tick's frames.
-    Unseen,
-    /// In a frame of this tick (its live keyframe slot changed).
-    Seen,
-    /// In a frame of this tick that became one of its keyframes.
-    NewKeyframe,
-}
-
-impl Sighting {
-    /// What the frames of this tick (`this_tick`) showed of an object last seen in frame
-    /// `last.frame` (`last.keyframe`: that frame became one of its keyframes).
-    pub fn of(last: Option<LastSeen>, this_tick: &[FrameIndex]) -> Self {
-        match last {
-            Some(seen) if this_tick.contains(&seen.frame) => {
-                if seen.keyframe {
-                    Self::NewKeyframe
-                } else {
-                    Self::Seen
-                }
-            }
-            _ => Self::Unseen,
-        }
-    }
-
-    /// The strongest of two sightings (a category field is seen when any member is).
-    pub fn max(self, other: Self) -> Self {
-        let rank = |s: Self| match s {
-            Self::Unseen => 0,
-            Self::Seen => 1,
-            Self::NewKeyframe => 2,
-        };
-        if rank(other) > rank(self) { other } else { self }
-    }
-}
-
-/// The latest frame an object was seen in.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub struct LastSeen {
-    /// The frame.
-    pub frame: FrameIndex,
-    /// Whether it became one of the object's keyframes.
-    pub keyframe: bool,
-}
-
-/// Whose mesh an object's own field makes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum MeshSource {
-    /// Its own field.
-    OwnField,
-    /// Its category field (it is a member of one).
-    CategoryField,
-}
-
-/// Whether frames are still streaming in.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum StreamPhase {
-    /// Frames arrive.
-    Streaming,
-    /// The stream has ended.
-    Ended,
-}
-
-impl FieldRole {
-    /// The role of an object's own field: learning while it makes the object's mesh; once a
-    /// category field makes it, supporting while the stream lasts (uncertainty and
-    /// re-registration read it) and frozen after.
-    pub fn of_object_field(mesh: MeshSource, phase: StreamPhase) -> Self {
-        match (mesh, phase) {
-            (MeshSource::OwnField, _) => Self::Learning,
-            (MeshSource::CategoryField, StreamPhase::Streaming) => Self::Supporting,
-            (MeshSource::CategoryField, StreamPhase::Ended) => Self::Frozen,
-        }
-    }
-}
-
-/// The facts about one field that a plan depends on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FieldFacts {
-    /// Which field.
-    pub key: FieldKey,
-    /// What it is for.
-    pub role: FieldRole,
-    /// What this tick's frames showed of it.
-    pub sighting: Sighting,
-}
-
-/// The facts of object `id`'s own field.
-pub fn object_field_facts(
-    id: ObjectId,
-    last_seen: Option<LastSeen>,
-    mesh: MeshSource,
-    phase: StreamPhase,
-    this_tick: &[FrameIndex],
-) -> FieldFacts {
-    FieldFacts {
-        key: FieldKey::Object(id),
-        role: FieldRole::of_object_field(mesh, phase),
-        sighting: Sighting::of(last_seen, this_tick),
-    }
-}
-
-/// The facts of category field `id` (its creation number): always learning, seen as its most
-/// recently seen member.
-pub fn category_field_facts(
-    id: u32,
-    members_last_seen: impl IntoIterator<Item = Option<LastSeen>>,
-    this_tick: &[FrameIndex],
-) -> FieldFacts {
-    let sighting = members_last_seen
-        .into_iter()
-        .map(|last| Sighting::of(last, this_tick))
-        .fold(Sighting::Unseen, Sighting::max);
-    FieldFacts {
-        key: FieldKey::Category(id),
-        role: FieldRole::Learning,
-        sighting,
-    }
-}
 
 /// Why a training phase ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -223,6 +79,9 @@ pub struct FieldProgress {
     pub state: FieldState,
     /// Steps it had taken when it last converged.
     pub converged_at: Option<u64>,
+    /// How many times its learning rate has been decayed since its latest new keyframe.
+    #[serde(default)]
+    pub decays: u32,
     window: LossWindow,
 }
 
@@ -232,6 +91,7 @@ impl Default for FieldProgress {
             steps: 0,
             state: FieldState::Training,
             converged_at: None,
+            decays: 0,
             window: LossWindow::default(),
         }
     }
@@ -295,6 +155,14 @@ impl StepScheduler {
         progress.window.push(loss, plateau);
     }
 
+    /// The factor of `key`'s learning rate for its next steps (1 until its loss plateaus after
+    /// the stream; see [`PlateauConfig::learning_rate_decays`]).
+    pub fn learning_rate_scale(&self, key: FieldKey, plateau: &PlateauConfig) -> f32 {
+        self.fields
+            .get(&key)
+            .map_or(1.0, |progress| plateau.learning_rate_scale(progress.decays))
+    }
+
     /// Every field's progress, in key order.
     pub fn progress(&self) -> &BTreeMap<FieldKey, FieldProgress> {
         &self.fields
@@ -307,16 +175,27 @@ impl StepScheduler {
 }
 
 /// The state of a field under the fast policy (a new keyframe also restarts its window).
+/// After the stream, a plateau first decays the learning rate (up to
+/// `plateau.learning_rate_decays` times, each restarting the window); a new keyframe restores it.
 fn next_state(progress: &mut FieldProgress, facts: &FieldFacts, plateau: &PlateauConfig) -> FieldState {
     if facts.sighting == Sighting::NewKeyframe {
         progress.window.clear();
+        progress.decays = 0;
     }
     match (facts.role, facts.sighting) {
         (FieldRole::Frozen, _) => FieldState::Frozen,
         (FieldRole::Supporting, Sighting::NewKeyframe) => FieldState::Training,
         (FieldRole::Supporting, _) => FieldState::Waiting,
         (FieldRole::Learning, Sighting::Seen | Sighting::NewKeyframe) => FieldState::Training,
-        (FieldRole::Learning, Sighting::Unseen) if progress.window.has_plateaued(plateau) => FieldState::Converged,
+        (FieldRole::Learning, Sighting::Unseen) if progress.window.has_plateaued(plateau) => {
+            if facts.phase == StreamPhase::Ended && progress.decays < plateau.learning_rate_decays {
+                progress.decays += 1;
+                progress.window.clear();
+                FieldState::Training
+            } else {
+                FieldState::Converged
+            }
+        }
         (FieldRole::Learning, Sighting::Unseen) => FieldState::Training,
     }
 }
@@ -324,10 +203,13 @@ fn next_state(progress: &mut FieldProgress, facts: &FieldFacts, plateau: &Platea
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ids::ObjectId;
 
     const PLATEAU: PlateauConfig = PlateauConfig {
         window_steps: 3,
         min_relative_drop: 0.05,
+        learning_rate_decays: 0,
+        learning_rate_decay: 1.0,
     };
 
     fn object(id: u32, role: FieldRole, sighting: Sighting) -> FieldFacts {
@@ -335,6 +217,15 @@ mod tests {
             key: FieldKey::Object(ObjectId(id)),
             role,
             sighting,
+            phase: StreamPhase::Streaming,
+        }
+    }
+
+    /// `facts` once the stream has ended.
+    fn after_stream(facts: FieldFacts) -> FieldFacts {
+        FieldFacts {
+            phase: StreamPhase::Ended,
+            ..facts
         }
     }
 
@@ -444,6 +335,7 @@ mod tests {
                 key: FieldKey::Category(0),
                 role: FieldRole::Learning,
                 sighting: Sighting::Unseen,
+                phase: StreamPhase::Ended,
             },
         ];
         for _ in 0..20 {
@@ -489,68 +381,6 @@ mod tests {
     }
 
     #[test]
-    fn sightings_come_from_the_latest_frame_an_object_was_seen_in() {
-        let tick = [FrameIndex(7), FrameIndex(8)];
-        let seen = |frame, keyframe| {
-            Some(LastSeen {
-                frame: FrameIndex(frame),
-                keyframe,
-            })
-        };
-        assert_eq!(Sighting::of(seen(8, false), &tick), Sighting::Seen);
-        assert_eq!(Sighting::of(seen(7, true), &tick), Sighting::NewKeyframe);
-        assert_eq!(
-            Sighting::of(seen(6, true), &tick),
-            Sighting::Unseen,
-            "seen in an earlier tick"
-        );
-        assert_eq!(Sighting::of(None, &tick), Sighting::Unseen);
-        assert_eq!(Sighting::Seen.max(Sighting::NewKeyframe), Sighting::NewKeyframe);
-        assert_eq!(Sighting::Seen.max(Sighting::Unseen), Sighting::Seen);
-    }
-
-    #[test]
-    fn a_category_member_supports_while_streaming_and_freezes_after() {
-        use FieldRole::*;
-        let role = FieldRole::of_object_field;
-        assert_eq!(role(MeshSource::OwnField, StreamPhase::Streaming), Learning);
-        assert_eq!(role(MeshSource::OwnField, StreamPhase::Ended), Learning);
-        assert_eq!(role(MeshSource::CategoryField, StreamPhase::Streaming), Supporting);
-        assert_eq!(role(MeshSource::CategoryField, StreamPhase::Ended), Frozen);
-    }
-
-    #[test]
-    fn a_category_field_is_seen_when_any_member_is() {
-        let tick = [FrameIndex(5)];
-        let seen = |frame, keyframe| {
-            Some(LastSeen {
-                frame: FrameIndex(frame),
-                keyframe,
-            })
-        };
-        let facts = category_field_facts(2, [seen(3, true), seen(5, false), None], &tick);
-        assert_eq!(
-            facts,
-            FieldFacts {
-                key: FieldKey::Category(2),
-                role: FieldRole::Learning,
-                sighting: Sighting::Seen,
-            }
-        );
-        let facts = object_field_facts(
-            ObjectId(4),
-            seen(5, true),
-            MeshSource::CategoryField,
-            StreamPhase::Streaming,
-            &tick,
-        );
-        assert_eq!(
-            (facts.role, facts.sighting),
-            (FieldRole::Supporting, Sighting::NewKeyframe)
-        );
-    }
-
-    #[test]
     fn a_phase_ends_when_nothing_trains_or_at_its_cap() {
         assert_eq!(PhaseEnd::of(50, 100, 3), None);
         assert_eq!(PhaseEnd::of(100, 100, 3), Some(PhaseEnd::StepCap));
@@ -568,6 +398,52 @@ mod tests {
         assert_eq!(
             scheduler.plan_batch(&facts, SchedulePolicy::Fast, &PLATEAU),
             [(1, FieldKey::Object(ObjectId(8))), (2, FieldKey::Object(ObjectId(7)))]
+        );
+    }
+    #[test]
+    fn after_the_stream_a_plateau_decays_the_learning_rate_before_the_field_converges() {
+        let plateau = PlateauConfig {
+            learning_rate_decays: 2,
+            learning_rate_decay: 0.5,
+            ..PLATEAU
+        };
+        let key = FieldKey::Object(ObjectId(1));
+        let mut scheduler = StepScheduler::default();
+        let run = |scheduler: &mut StepScheduler, facts: &[FieldFacts], steps: usize| {
+            for _ in 0..steps {
+                for key in scheduler.plan(facts, SchedulePolicy::Fast, &plateau) {
+                    scheduler.record(key, 1.0, &plateau);
+                }
+            }
+        };
+        let streaming = [object(1, FieldRole::Learning, Sighting::Unseen)];
+        run(&mut scheduler, &streaming, 20);
+        assert_eq!(
+            (scheduler.progress()[&key].steps, scheduler.progress()[&key].state),
+            (6, FieldState::Converged),
+            "while streaming, a plateau rests the field at its full rate"
+        );
+        assert_eq!(scheduler.learning_rate_scale(key, &plateau), 1.0);
+        let ended = [after_stream(streaming[0])];
+        run(&mut scheduler, &ended, 20);
+        let progress = &scheduler.progress()[&key];
+        assert_eq!(
+            (progress.steps, progress.decays, progress.state),
+            (6 + 6 + 6, 2, FieldState::Converged),
+            "two more plateaus, at half and a quarter of the rate"
+        );
+        assert_eq!(scheduler.learning_rate_scale(key, &plateau), 0.25);
+        let keyframe = [object(1, FieldRole::Learning, Sighting::NewKeyframe)];
+        run(&mut scheduler, &keyframe, 1);
+        assert_eq!(
+            scheduler.learning_rate_scale(key, &plateau),
+            1.0,
+            "new data: the full rate again"
+        );
+        assert_eq!(
+            scheduler.learning_rate_scale(FieldKey::Category(9), &plateau),
+            1.0,
+            "an unknown field trains at the full rate"
         );
     }
 }

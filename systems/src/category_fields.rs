@@ -18,7 +18,7 @@ use catmap::FrameIndex;
 use catmap::training::{FieldFacts, LastSeen, category_field_facts};
 
 use crate::components::{CameraFrame, FieldRng, FieldSlot, Keyframes, LatestBox, Object, Subcategories};
-use crate::resources::{Settings, StageTimes, TrainingSchedule};
+use crate::resources::{Settings, StageTimes, StreamProgress, TrainingSchedule};
 
 /// The category fields and their members.
 #[derive(Resource, Debug)]
@@ -203,6 +203,7 @@ pub fn train_category_fields(
     mut fields: ResMut<CategoryFields>,
     mut schedule: ResMut<TrainingSchedule>,
     frames: Query<&CameraFrame>,
+    progress: Res<StreamProgress>,
     mut members: Members,
     objects: Query<(), (With<Object>, With<FieldSlot>)>,
     mut times: ResMut<StageTimes>,
@@ -215,6 +216,7 @@ pub fn train_category_fields(
     let _timer = times.start("category_train");
     let config = &settings.0;
     let tick: Vec<FrameIndex> = frames.iter().map(|f| f.0.index).collect();
+    let phase = crate::train::stream_phase(&progress);
     let fields = &mut *fields;
     let mut last_seen: Vec<Vec<LastSeen>> = vec![Vec::new(); fields.members.len()];
     for (.., slot, latest, _) in &members {
@@ -226,7 +228,7 @@ pub fn train_category_fields(
         .ids
         .iter()
         .zip(last_seen)
-        .map(|(&id, seen)| category_field_facts(id, seen.into_iter().map(Some), &tick))
+        .map(|(&id, seen)| category_field_facts(id, seen.into_iter().map(Some), phase, &tick))
         .enumerate()
         .collect();
     let schedule = &mut *schedule;
@@ -235,6 +237,10 @@ pub fn train_category_fields(
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
     schedule.planned_categories = planned.len();
     let active: Vec<usize> = planned.iter().map(|(k, _)| *k).collect();
+    let scales: Vec<f32> = planned
+        .iter()
+        .map(|(_, key)| schedule.scheduler.learning_rate_scale(*key, &config.schedule.plateau))
+        .collect();
     let objects = objects.iter().count();
     let member_count: usize = fields.members.iter().map(Vec::len).sum();
     let categories = fields.members.len() + objects.saturating_sub(member_count);
@@ -275,7 +281,7 @@ pub fn train_category_fields(
                 tracing::warn!(field, member, error = %e, "member rays skipped");
             }
         }
-        match fields.batch.train_step_of(&active, &samples) {
+        match fields.batch.train_step_scaled(&active, &scales, &samples) {
             Ok(losses) => {
                 for (&(k, key), loss) in planned.iter().zip(losses) {
                     fields.losses[k] = loss.total;

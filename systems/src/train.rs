@@ -145,6 +145,11 @@ pub fn train_fields(
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
     schedule.planned_objects = active.len();
     let indices: Vec<usize> = active.iter().map(|(i, _)| *i).collect();
+    let plateau = &config.schedule.plateau;
+    let scales: Vec<f32> = active
+        .iter()
+        .map(|(_, key)| schedule.scheduler.learning_rate_scale(*key, plateau))
+        .collect();
     let fields = &mut *fields;
     for _ in 0..std::mem::take(&mut queue.pending) {
         if !indices.is_empty() {
@@ -152,6 +157,7 @@ pub fn train_fields(
                 &mut owners,
                 FieldOwner::Objects,
                 &indices,
+                &scales,
                 &mut fields.objects,
                 &cfg.object_rays,
             ) {
@@ -169,6 +175,7 @@ pub fn train_fields(
                 &mut owners,
                 FieldOwner::Background,
                 &[0],
+                &[1.0],
                 &mut fields.background,
                 &cfg.background_rays,
             );
@@ -189,13 +196,14 @@ pub fn stream_phase(progress: &StreamProgress) -> StreamPhase {
     }
 }
 
-/// One step of the fields `indices` (ascending) of `batch`: samples their owners' rays (the
-/// background's, or the objects') in parallel, trains, and records each owner's losses;
-/// returns their total losses, in index order.
+/// One step of the fields `indices` (ascending; learning rates scaled by `scales`) of `batch`:
+/// samples their owners' rays (the background's, or the objects') in parallel, trains, and
+/// records each owner's losses; returns their total losses, in index order.
 fn train_one(
     owners: &mut FieldOwners,
     owner: FieldOwner,
     indices: &[usize],
+    scales: &[f32],
     batch: &mut catmap::field::FieldBatch,
     rays: &RaySamplerConfig,
 ) -> catmap::Result<Vec<f32>> {
@@ -223,7 +231,7 @@ fn train_one(
             sample_training_rays(&views, window.recent_slots(), &slot.origin, rays, &mut rng.0)
         })
         .collect();
-    let losses = batch.train_step_of(indices, &SampleBatch { fields })?;
+    let losses = batch.train_step_scaled(indices, scales, &SampleBatch { fields })?;
     for ((.., loss), latest) in work.iter_mut().zip(&losses) {
         loss.latest = *latest;
         loss.steps += 1;

@@ -14,6 +14,7 @@ use super::super::adamw::AdamWConfig;
 use super::super::batch::CHUNK_SAMPLES;
 use super::super::loss::{FieldLosses, LossNorm};
 use super::super::simd::Backend;
+use super::super::adamw::scaled_optimisers;
 use super::super::tasks::{Task, TaskPool, plan_tasks, tasks_by_field, update_active};
 use super::model::CategoryField;
 use super::net::{CategoryNet, CategoryScratch};
@@ -123,13 +124,25 @@ impl CategoryBatch {
     /// [`CategorySamples`] per active category, in that order): returns their losses before the
     /// update. The other categories' weights, codes and optimiser moments stay bit for bit.
     pub fn train_step_of(&mut self, active: &[usize], samples: &[CategorySamples]) -> Result<Vec<CategoryLosses>> {
+        self.train_step_scaled(active, &vec![1.0; active.len()], samples)
+    }
+
+    /// [`CategoryBatch::train_step_of`] with category `active[k]`'s learning rate (weights and
+    /// codes, and so their weight decay) multiplied by `learning_rate_scales[k]`.
+    pub fn train_step_scaled(
+        &mut self,
+        active: &[usize],
+        learning_rate_scales: &[f32],
+        samples: &[CategorySamples],
+    ) -> Result<Vec<CategoryLosses>> {
+        let optims = scaled_optimisers(&self.optim, active, learning_rate_scales)?;
         let losses = self.compute_gradients(active, samples)?;
-        let optim = self.optim;
-        update_active(&mut self.fields, active, &self.grads, |field, grad| {
+        update_active(&mut self.fields, active, &self.grads, |k, field, grad| {
+            let optim = &optims[k];
             let ((params, state), codes) = field.states_mut();
-            state.update(&optim, params, &grad.weights);
+            state.update(optim, params, &grad.weights);
             for ((code, state), g) in codes.into_iter().zip(&grad.codes) {
-                state.update(&optim, code, g);
+                state.update(optim, code, g);
             }
         });
         Ok(losses)
