@@ -1,109 +1,26 @@
 //! Registering one class: representative choice, registration of every member to it,
 //! subcategories and each member's NOCS frame (METHOD.md §3–§4), as one pure function.
 
+mod config;
+mod pairs;
+
 use std::collections::BTreeMap;
 
-use nalgebra::{Isometry3, Point3};
+use nalgebra::Point3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::category::{Alignment, PairRegistration, SubcategoryRule, subcategorize};
-use crate::config::FieldConfig;
+pub use config::{CategoryConfig, RegistrationStart};
+pub use pairs::PairPoints;
+
+use crate::category::{Alignment, subcategorize};
 use crate::error::{CatmapError, Result};
 use crate::ids::ObjectId;
 use crate::nocs::{NocsFrame, aligned_member_frame, representative_frame};
 use crate::oriented_box::OrientedBox;
-use crate::registration::{
-    RegistrationConfig, normalised_one_way_chamfer, refine_registration, register_to_representative, voxel_centroids,
-};
-use crate::uncertainty::{RepresentativeChoice, UncertaintyConfig};
-
-/// Settings of category-level registration.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct CategoryConfig {
-    /// Register classes while mapping (needs the per-object fields: uncertainty ranks the
-    /// representative). `--mode category` needs it.
-    pub enabled: bool,
-    /// How a (sub)category's representative is chosen.
-    pub representative: RepresentativeChoice,
-    /// The subcategory rule.
-    pub subcategories: SubcategoryRule,
-    /// The uncertainty sphere.
-    pub uncertainty: UncertaintyConfig,
-    /// Pairwise registration.
-    pub registration: RegistrationConfig,
-    /// A class is registered again when one of its members' clouds has grown by more than this
-    /// fraction since the class was last registered (0.2 = 20 %), or when it gains a member.
-    pub reregister_growth: f32,
-    /// Members' fields must have taken this many steps before their uncertainty is trusted
-    /// (online; offline, the whole per-object training: see
-    /// [`CategoryConfig::field_steps_before_registration`]).
-    pub min_field_steps: u64,
-    /// Members' clouds are thinned to this voxel before registration and Chamfer scores, metres.
-    pub cloud_voxel_m: f32,
-    /// Smallest edge of an aligned member's box, metres.
-    pub min_extent_m: f32,
-    /// Where a re-registration starts each pair registered before.
-    pub registration_start: RegistrationStart,
-    /// A warm start is kept when its score is at most the stored one × (1 + this); otherwise the
-    /// full search runs and the better of the two is kept.
-    pub warm_start_tolerance: f32,
-    /// A member's uncertainty sphere is evaluated again only when its cloud or its field's steps
-    /// have grown by more than this fraction since it was last evaluated (0.25 = 25 %).
-    pub uncertainty_refresh_growth: f32,
-}
-
-/// Where a re-registration of a class starts a pair (member, representative) it registered before.
-///
-/// Measured on the default scene (seed 0, fast schedule): `warm` cut the registration stage from
-/// 65 s to 43–46 s but left the chairs' accuracy at 3.5–3.8 cm against 3.0 cm with `search` — an
-/// alignment found on an early, partial cloud stays in its basin as the cloud grows — so `search`
-/// is the default.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum RegistrationStart {
-    /// From the pair's previous alignment (ICP refinement only), falling back to the full search
-    /// when that scores worse than the stored alignment.
-    Warm,
-    /// The full multi-start search every time.
-    #[default]
-    Search,
-}
-
-impl Default for CategoryConfig {
-    fn default() -> Self {
-        Self {
-            enabled: true,
-            representative: RepresentativeChoice::Uncertainty,
-            subcategories: SubcategoryRule::default(),
-            uncertainty: UncertaintyConfig::default(),
-            registration: RegistrationConfig::default(),
-            reregister_growth: 0.2,
-            min_field_steps: 200,
-            cloud_voxel_m: 0.02,
-            min_extent_m: 0.10,
-            registration_start: RegistrationStart::Search,
-            warm_start_tolerance: 0.1,
-            uncertainty_refresh_growth: 0.25,
-        }
-    }
-}
-
-impl CategoryConfig {
-    /// Steps every member's field must have taken before its class is registered: online,
-    /// `min_field_steps`; offline, all of the per-object training (as the reference code, which
-    /// ranks uncertainty on the finished vMAP fields — early fields are confidently wrong in
-    /// space no camera saw, which hides how well each member was observed).
-    pub fn field_steps_before_registration(&self, fields: &FieldConfig) -> u64 {
-        if fields.offline {
-            self.min_field_steps.max(fields.offline_iterations as u64)
-        } else {
-            self.min_field_steps
-        }
-    }
-}
+use crate::registration::voxel_centroids;
+use pairs::{ClassClouds, Previous};
 
 /// One member as registration sees it.
 #[derive(Debug, Clone, PartialEq)]
@@ -125,6 +42,10 @@ pub struct RegisteredMember {
     pub alignment: Alignment,
     /// Its box and normalised frame.
     pub nocs: NocsFrame,
+    /// The cloud sizes (its own, its representative's) its alignment was found at (`None` for
+    /// the representative).
+    #[serde(default)]
+    pub found_at: Option<PairPoints>,
 }
 
 /// A registered subcategory.
@@ -152,17 +73,8 @@ pub fn register_class(
         .iter()
         .map(|m| Ok((m.id, voxel_centroids(&m.cloud, cfg.cloud_voxel_m)?)))
         .collect::<Result<_>>()?;
-    let warm = match cfg.registration_start {
-        RegistrationStart::Warm => previous_alignments(previous),
-        RegistrationStart::Search => BTreeMap::new(),
-    };
-    let pairs = ClassClouds {
-        clouds: &clouds,
-        cfg: &cfg.registration,
-        seed,
-        warm,
-        warm_tolerance: cfg.warm_start_tolerance,
-    };
+    let sizes: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.cloud.len())).collect();
+    let pairs = ClassClouds::new(&clouds, &sizes, cfg, previous_alignments(previous), seed);
     let reliable: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.reliable_rays)).collect();
     let ids: Vec<ObjectId> = members.iter().map(|m| m.id).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -189,7 +101,17 @@ pub fn register_class(
                         let cloud = &by_id[&id].cloud;
                         aligned_member_frame(cloud, &alignment.template_from_object, &rep_frame, cfg.min_extent_m)?
                     };
-                    Ok((id, RegisteredMember { alignment, nocs }))
+                    let found_at = (id != group.representative)
+                        .then(|| pairs.found_at(id, group.representative))
+                        .flatten();
+                    Ok((
+                        id,
+                        RegisteredMember {
+                            alignment,
+                            nocs,
+                            found_at,
+                        },
+                    ))
                 })
                 .collect::<Result<_>>()?;
             Ok(RegisteredSubcategory {
@@ -200,69 +122,18 @@ pub fn register_class(
         .collect()
 }
 
-/// The stored alignment of every (member, representative) pair of a registration.
-fn previous_alignments(groups: &[RegisteredSubcategory]) -> BTreeMap<(ObjectId, ObjectId), Alignment> {
+/// The stored alignment of every (member, representative) pair of a registration, with the
+/// cloud sizes it was found at.
+fn previous_alignments(groups: &[RegisteredSubcategory]) -> Previous {
     groups
         .iter()
         .flat_map(|g| {
             g.members
                 .iter()
                 .filter(|(id, _)| **id != g.representative)
-                .map(|(id, m)| ((*id, g.representative), m.alignment))
+                .map(|(id, m)| ((*id, g.representative), (m.alignment, m.found_at)))
         })
         .collect()
-}
-
-/// Pairwise registration over a class's thinned clouds.
-struct ClassClouds<'a> {
-    clouds: &'a BTreeMap<ObjectId, Vec<Point3<f32>>>,
-    cfg: &'a RegistrationConfig,
-    seed: u64,
-    /// Previous alignments of (source, template) pairs: warm starts.
-    warm: BTreeMap<(ObjectId, ObjectId), Alignment>,
-    warm_tolerance: f32,
-}
-
-impl ClassClouds<'_> {
-    fn cloud(&self, id: ObjectId) -> Result<&[Point3<f32>]> {
-        self.clouds
-            .get(&id)
-            .map(Vec::as_slice)
-            .ok_or_else(|| CatmapError::Degenerate(format!("no cloud for object {id}")))
-    }
-}
-
-impl PairRegistration for ClassClouds<'_> {
-    fn register(&self, source: ObjectId, template: ObjectId) -> Result<(Isometry3<f32>, f32)> {
-        let (s, t) = (self.cloud(source)?, self.cloud(template)?);
-        let warm = match self.warm.get(&(source, template)) {
-            Some(stored) => {
-                let warm = refine_registration(s, t, &stored.template_from_object, self.cfg)?;
-                if warm_start_holds(warm.score, stored.chamfer, self.warm_tolerance) {
-                    return Ok((warm.template_from_source(), warm.score));
-                }
-                Some(warm)
-            }
-            None => None,
-        };
-        // One stream per ordered pair, so results do not depend on the order pairs are tried.
-        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
-        rng.set_stream((u64::from(source.0) << 32) | u64::from(template.0));
-        let full = register_to_representative(s, t, self.cfg, &mut rng)?;
-        let best = match warm {
-            Some(warm) if warm.score < full.score => warm,
-            _ => full,
-        };
-        Ok((best.template_from_source(), best.score))
-    }
-
-    fn reverse_chamfer(&self, source: ObjectId, template: ObjectId, template_from_source: &Isometry3<f32>) -> f32 {
-        let (Ok(s), Ok(t)) = (self.cloud(source), self.cloud(template)) else {
-            return f32::INFINITY;
-        };
-        let aligned: Vec<Point3<f32>> = s.iter().map(|p| template_from_source * p).collect();
-        normalised_one_way_chamfer(t, &aligned).unwrap_or(f32::INFINITY)
-    }
 }
 
 /// Whether a class must be registered (again): it never was (`registered_points` is `None`), a
@@ -291,7 +162,10 @@ pub fn warm_start_holds(warm: f32, stored: f32, tolerance: f32) -> bool {
 
 #[cfg(test)]
 mod tests {
+    use nalgebra::Isometry3;
+
     use super::*;
+    use crate::config::FieldConfig;
 
     #[test]
     fn a_class_is_due_when_new_when_its_members_change_or_a_cloud_grows() {
@@ -426,5 +300,65 @@ mod tests {
             cfg.min_field_steps,
             "never before the fields are trusted at all"
         );
+    }
+
+    #[test]
+    fn an_alignment_stands_while_neither_cloud_grew_by_more_than_the_growth() {
+        let then = PairPoints {
+            source: 1_000,
+            template: 500,
+        };
+        let now = |source, template| PairPoints { source, template };
+        assert!(then.still_hold(now(1_200, 600), 0.2), "20 % is not more than 20 %");
+        assert!(!then.still_hold(now(1_201, 500), 0.2), "the member's cloud grew");
+        assert!(!then.still_hold(now(1_000, 601), 0.2), "the representative's cloud grew");
+    }
+
+    #[test]
+    fn a_reused_pair_keeps_its_alignment_until_a_cloud_grows() {
+        let members = three_members();
+        let first = register_class(&members, &[], &starting(RegistrationStart::Search), 7).unwrap();
+        let chair = |groups: &[RegisteredSubcategory]| groups[0].members[&ObjectId(2)];
+        let found = chair(&first).found_at.expect("a searched pair records its cloud sizes");
+        assert_eq!(
+            found,
+            PairPoints {
+                source: members[1].cloud.len(),
+                template: members[0].cloud.len()
+            }
+        );
+        assert_eq!(first[0].members[&ObjectId(1)].found_at, None, "the representative");
+        let reuse = starting(RegistrationStart::Reuse);
+        let again = register_class(&members, &first, &reuse, 7).unwrap();
+        assert_eq!(groups(&again), groups(&first));
+        let (kept, searched) = (chair(&again), chair(&first));
+        assert_eq!(
+            (kept.alignment.template_from_object, kept.nocs, kept.found_at),
+            (searched.alignment.template_from_object, searched.nocs, searched.found_at),
+            "same clouds: the alignment is kept as it was"
+        );
+        assert!(
+            (kept.alignment.chamfer - searched.alignment.chamfer).abs() < 1e-6,
+            "rescored on the same clouds (in f32 rather than the search's f64 pose)"
+        );
+
+        // The member's cloud grows by half (its points again, shifted by 1 mm): searched anew.
+        let mut grown = members.clone();
+        let extra: Vec<Point3<f32>> = grown[1]
+            .cloud
+            .iter()
+            .step_by(2)
+            .map(|p| p + nalgebra::Vector3::new(0.001, 0.0, 0.0))
+            .collect();
+        grown[1].cloud.extend(extra);
+        let after = register_class(&grown, &again, &reuse, 7).unwrap();
+        assert_eq!(groups(&after), groups(&first));
+        assert_eq!(
+            chair(&after).found_at.map(|p| p.source),
+            Some(grown[1].cloud.len()),
+            "searched at the grown size"
+        );
+        let searched = register_class(&grown, &[], &starting(RegistrationStart::Search), 7).unwrap();
+        assert_eq!(chair(&after), chair(&searched), "exactly the full search's result");
     }
 }

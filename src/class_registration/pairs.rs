@@ -1,0 +1,156 @@
+//! [`ClassClouds`]: the pairwise registrations of one class, over its thinned clouds, each pair
+//! started as [`RegistrationStart`] says when the class's previous registration had it.
+
+use std::collections::BTreeMap;
+use std::sync::Mutex;
+
+use nalgebra::{Isometry3, Point3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::config::RegistrationStart;
+use super::warm_start_holds;
+use crate::category::{Alignment, PairRegistration};
+use crate::error::{CatmapError, Result};
+use crate::ids::ObjectId;
+use crate::registration::{
+    RegistrationConfig, normalised_one_way_chamfer, refine_registration, register_to_representative,
+};
+
+/// The sizes of a (member, representative) pair's observed clouds when its alignment was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PairPoints {
+    /// Points of the member's cloud.
+    pub source: usize,
+    /// Points of the representative's cloud.
+    pub template: usize,
+}
+
+impl PairPoints {
+    /// Whether an alignment found at these sizes still stands for clouds of sizes `now`: neither
+    /// grew by more than `growth` (a fraction).
+    pub fn still_hold(&self, now: PairPoints, growth: f32) -> bool {
+        let within = |then: usize, now: usize| now as f64 <= then as f64 * (1.0 + f64::from(growth));
+        within(self.source, now.source) && within(self.template, now.template)
+    }
+}
+
+/// A pair's alignment in the class's previous registration, and the cloud sizes it was found at.
+pub(super) type Previous = BTreeMap<(ObjectId, ObjectId), (Alignment, Option<PairPoints>)>;
+
+/// Pairwise registration over a class's thinned clouds.
+pub(super) struct ClassClouds<'a> {
+    /// Thinned clouds, by member.
+    pub clouds: &'a BTreeMap<ObjectId, Vec<Point3<f32>>>,
+    /// Sizes of the members' observed clouds now.
+    pub sizes: &'a BTreeMap<ObjectId, usize>,
+    pub cfg: &'a RegistrationConfig,
+    pub seed: u64,
+    /// Where a pair registered before starts.
+    pub start: RegistrationStart,
+    pub previous: Previous,
+    pub warm_tolerance: f32,
+    /// `Reuse`: how much both clouds may have grown for an alignment to be kept.
+    pub growth: f32,
+    /// The cloud sizes each answered pair's alignment was found at.
+    found_at: Mutex<BTreeMap<(ObjectId, ObjectId), PairPoints>>,
+}
+
+impl<'a> ClassClouds<'a> {
+    /// Pairs over `clouds` (thinned) of members whose observed clouds have `sizes` now.
+    pub fn new(
+        clouds: &'a BTreeMap<ObjectId, Vec<Point3<f32>>>,
+        sizes: &'a BTreeMap<ObjectId, usize>,
+        cfg: &'a super::CategoryConfig,
+        previous: Previous,
+        seed: u64,
+    ) -> Self {
+        Self {
+            clouds,
+            sizes,
+            cfg: &cfg.registration,
+            seed,
+            start: cfg.registration_start,
+            previous,
+            warm_tolerance: cfg.warm_start_tolerance,
+            growth: cfg.reregister_growth,
+            found_at: Mutex::new(BTreeMap::new()),
+        }
+    }
+
+    fn cloud(&self, id: ObjectId) -> Result<&[Point3<f32>]> {
+        self.clouds
+            .get(&id)
+            .map(Vec::as_slice)
+            .ok_or_else(|| CatmapError::Degenerate(format!("no cloud for object {id}")))
+    }
+
+    /// The cloud sizes the alignment of `source` to `template` was found at, once answered.
+    pub fn found_at(&self, source: ObjectId, template: ObjectId) -> Option<PairPoints> {
+        let found = self.found_at.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        found.get(&(source, template)).copied()
+    }
+
+    fn record(&self, source: ObjectId, template: ObjectId, points: PairPoints) {
+        let mut found = self.found_at.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        found.insert((source, template), points);
+    }
+
+    /// The full multi-start search (one random stream per ordered pair, so results do not depend
+    /// on the order pairs are tried).
+    fn search(&self, source: ObjectId, template: ObjectId) -> Result<crate::registration::Registration> {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        rng.set_stream((u64::from(source.0) << 32) | u64::from(template.0));
+        register_to_representative(self.cloud(source)?, self.cloud(template)?, self.cfg, &mut rng)
+    }
+}
+
+impl PairRegistration for ClassClouds<'_> {
+    fn register(&self, source: ObjectId, template: ObjectId) -> Result<(Isometry3<f32>, f32)> {
+        let (s, t) = (self.cloud(source)?, self.cloud(template)?);
+        let size = |id| self.sizes.get(&id).copied().unwrap_or(0);
+        let now = PairPoints {
+            source: size(source),
+            template: size(template),
+        };
+        let previous = self.previous.get(&(source, template));
+        if self.start == RegistrationStart::Reuse
+            && let Some((stored, Some(then))) = previous
+            && then.still_hold(now, self.growth)
+        {
+            // The same pair on nearly the same clouds: the search would find the same alignment.
+            let pose = stored.template_from_object;
+            let aligned: Vec<Point3<f32>> = s.iter().map(|p| pose * p).collect();
+            let score = normalised_one_way_chamfer(&aligned, t)?;
+            self.record(source, template, *then);
+            return Ok((pose, score));
+        }
+        let warm = match previous {
+            Some((stored, _)) if self.start == RegistrationStart::Warm => {
+                let warm = refine_registration(s, t, &stored.template_from_object, self.cfg)?;
+                if warm_start_holds(warm.score, stored.chamfer, self.warm_tolerance) {
+                    self.record(source, template, now);
+                    return Ok((warm.template_from_source(), warm.score));
+                }
+                Some(warm)
+            }
+            _ => None,
+        };
+        let full = self.search(source, template)?;
+        let best = match warm {
+            Some(warm) if warm.score < full.score => warm,
+            _ => full,
+        };
+        self.record(source, template, now);
+        Ok((best.template_from_source(), best.score))
+    }
+
+    fn reverse_chamfer(&self, source: ObjectId, template: ObjectId, template_from_source: &Isometry3<f32>) -> f32 {
+        let (Ok(s), Ok(t)) = (self.cloud(source), self.cloud(template)) else {
+            return f32::INFINITY;
+        };
+        let aligned: Vec<Point3<f32>> = s.iter().map(|p| template_from_source * p).collect();
+        normalised_one_way_chamfer(t, &aligned).unwrap_or(f32::INFINITY)
+    }
+}
