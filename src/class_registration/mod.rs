@@ -311,7 +311,10 @@ mod tests {
         let now = |source, template| PairPoints { source, template };
         assert!(then.still_hold(now(1_200, 600), 0.2), "20 % is not more than 20 %");
         assert!(!then.still_hold(now(1_201, 500), 0.2), "the member's cloud grew");
-        assert!(!then.still_hold(now(1_000, 601), 0.2), "the representative's cloud grew");
+        assert!(
+            !then.still_hold(now(1_000, 601), 0.2),
+            "the representative's cloud grew"
+        );
     }
 
     #[test]
@@ -334,7 +337,11 @@ mod tests {
         let (kept, searched) = (chair(&again), chair(&first));
         assert_eq!(
             (kept.alignment.template_from_object, kept.nocs, kept.found_at),
-            (searched.alignment.template_from_object, searched.nocs, searched.found_at),
+            (
+                searched.alignment.template_from_object,
+                searched.nocs,
+                searched.found_at
+            ),
             "same clouds: the alignment is kept as it was"
         );
         assert!(

@@ -10,12 +10,12 @@
 use rayon::prelude::*;
 
 use super::adamw::AdamWConfig;
+use super::adamw::scaled_optimisers;
 use super::loss::{FieldLosses, LossNorm};
 use super::object_field::OccupancyField;
 use super::occupancy::{OccupancyNet, OccupancyScratch};
 use super::samples::SampleBatch;
 use super::simd::Backend;
-use super::adamw::scaled_optimisers;
 use super::tasks::{Task, TaskPool, plan_tasks, tasks_by_field, update_active};
 use crate::error::{CatmapError, Result};
 
@@ -326,7 +326,13 @@ mod tests {
         let samples = rays(4, 2);
         let mut scaled = batch_of(2);
         scaled
-            .train_step_scaled(&[0, 1], &[0.5, 1.0], &SampleBatch { fields: samples.clone() })
+            .train_step_scaled(
+                &[0, 1],
+                &[0.5, 1.0],
+                &SampleBatch {
+                    fields: samples.clone(),
+                },
+            )
             .expect("valid step");
         let mut halved = FieldBatch::new(AdamWConfig {
             lr: AdamWConfig::default().lr * 0.5,
@@ -335,7 +341,11 @@ mod tests {
         for field in batch_of(2).fields() {
             halved.push(field.clone());
         }
-        halved.train_step(&SampleBatch { fields: samples.clone() }).expect("valid step");
+        halved
+            .train_step(&SampleBatch {
+                fields: samples.clone(),
+            })
+            .expect("valid step");
         let mut full = batch_of(2);
         full.train_step(&SampleBatch { fields: samples }).expect("valid step");
         assert_eq!(scaled.field(0), halved.field(0), "field 0 at half the rate");

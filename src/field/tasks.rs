@@ -21,7 +21,9 @@ pub(crate) fn update_active<F: Send, G: Sync>(
         .enumerate()
         .filter_map(|(i, field)| active.binary_search(&i).ok().map(|k| (k, field, &grads[k])))
         .collect();
-    updates.par_iter_mut().for_each(|(k, field, grad)| update(*k, field, grad));
+    updates
+        .par_iter_mut()
+        .for_each(|(k, field, grad)| update(*k, field, grad));
 }
 
 /// One task: units `start..end` of field `field`.

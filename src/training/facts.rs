@@ -200,12 +200,7 @@ mod tests {
                 keyframe,
             })
         };
-        let facts = category_field_facts(
-            2,
-            [seen(3, true), seen(5, false), None],
-            StreamPhase::Streaming,
-            &tick,
-        );
+        let facts = category_field_facts(2, [seen(3, true), seen(5, false), None], StreamPhase::Streaming, &tick);
         assert_eq!(
             facts,
             FieldFacts {

@@ -21,7 +21,6 @@ use serde::{Deserialize, Serialize};
 use super::facts::{FieldFacts, FieldKey, FieldRole, Sighting, StreamPhase};
 use super::plateau::{LossWindow, PlateauConfig};
 
-
 /// Why a training phase ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

@@ -12,7 +12,6 @@ use catmap::meshing::MapMeshes;
 use catmap::observed_cloud::ObservedCloud;
 use catmap::rng::{RngStream, seeded_rng};
 use catmap::stream::{StreamMessage, StreamStats};
-use catmap::training::PhaseEnd;
 use catmap::{MapperConfig, RgbdFrame};
 use crossbeam_channel::{Receiver, Sender, TrySendError, bounded};
 
@@ -21,14 +20,17 @@ use crate::components::{Background, Keyframes, ObjectCloud, ObjectRng, VisibleFr
 use crate::log_rerun::{Rerun, log_world_setup};
 use crate::meshes::collect_meshes;
 use crate::resources::{
-    CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, SmallInstances, StageTimes,
-    StreamProgress, TrainingQueue, TrainingSchedule,
+    AfterStreamPhase, CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, SmallInstances,
+    StageTimes, StreamProgress, TrainingQueue, TrainingSchedule,
 };
 use crate::schedule::{
     build_after_stream_schedule, build_category_schedule, build_final_mesh_schedule, build_schedule,
     build_training_schedule,
 };
 use crate::snapshot::MapSnapshot;
+
+mod phase_chunks;
+use phase_chunks::PhaseChunks;
 
 /// Errors of the mapper facade.
 #[derive(Debug, thiserror::Error)]
@@ -254,42 +256,30 @@ impl Mapper {
     /// Like [`Mapper::train_after_stream`], continuing from the steps already done (after a
     /// resume) and stopping early when `on_chunk` breaks; returns whether the phase is complete.
     /// Under the fast schedule the phase also ends once no field gains from more steps.
-    pub fn train_after_stream_until(&mut self, mut on_chunk: impl FnMut(u64, u64) -> ControlFlow<()>) -> bool {
+    pub fn train_after_stream_until(&mut self, on_chunk: impl FnMut(u64, u64) -> ControlFlow<()>) -> bool {
         let phases = self.world.resource::<Settings>().0.after_stream();
-        let total = phases.first_cap;
-        loop {
-            let progress = *self.world.resource::<PhaseProgress>();
-            let done = progress.after_stream_steps;
-            if progress.after_stream_end.is_some() || done >= total {
-                return true;
-            }
-            let n = CHUNK_STEPS.min(total - done);
-            self.world.resource_mut::<TrainingQueue>().pending += n;
-            let planned = match phases.first {
+        let first = phases.first;
+        let chunks = PhaseChunks {
+            phase: AfterStreamPhase::First,
+            cap: phases.first_cap,
+            ends_on_convergence: phases.ends_on_convergence,
+            runs_once_at_least: false,
+        };
+        self.run_phase_chunks(chunks, on_chunk, |mapper, n| {
+            mapper.world.resource_mut::<TrainingQueue>().pending += n;
+            match first {
                 FirstPhase::ObjectFields => {
-                    self.training.run(&mut self.world);
-                    self.world.resource::<TrainingSchedule>().planned_objects
+                    mapper.training.run(&mut mapper.world);
+                    mapper.world.resource::<TrainingSchedule>().planned_objects
                 }
                 FirstPhase::ObjectAndCategoryFields => {
-                    self.world.resource_mut::<CategoryFields>().pending += n;
-                    self.after_stream.run(&mut self.world);
-                    let schedule = self.world.resource::<TrainingSchedule>();
+                    mapper.world.resource_mut::<CategoryFields>().pending += n;
+                    mapper.after_stream.run(&mut mapper.world);
+                    let schedule = mapper.world.resource::<TrainingSchedule>();
                     schedule.planned_objects + schedule.planned_categories
                 }
-            };
-            let planned = if phases.ends_on_convergence {
-                planned
-            } else {
-                usize::MAX
-            };
-            let end = PhaseEnd::of(done + n, total, planned);
-            let mut progress = self.world.resource_mut::<PhaseProgress>();
-            progress.after_stream_steps += n;
-            progress.after_stream_end = end;
-            if on_chunk(done + n, total).is_break() {
-                return end.is_some();
             }
-        }
+        })
     }
 
     /// Runs `iterations` training steps on the keyframes gathered so far (the offline protocol,
@@ -321,38 +311,27 @@ impl Mapper {
     /// resume) and stopping early when `on_chunk` breaks; returns whether the phase is complete.
     /// Under the fast schedule the phase also ends once no field gains from more steps; online,
     /// the fast schedule has no category phase (the category fields trained in the phase before).
-    pub fn train_categories_until(&mut self, mut on_chunk: impl FnMut(u64, u64) -> ControlFlow<()>) -> bool {
+    pub fn train_categories_until(&mut self, on_chunk: impl FnMut(u64, u64) -> ControlFlow<()>) -> bool {
         let phases = self.world.resource::<Settings>().0.after_stream();
-        let Some(total) = phases.category_cap else {
+        let Some(cap) = phases.category_cap else {
             return true;
         };
-        loop {
-            let progress = *self.world.resource::<PhaseProgress>();
-            let done = progress.category_steps;
+        let started = self.category_phase_started || self.world.resource::<PhaseProgress>().category_steps > 0;
+        let chunks = PhaseChunks {
+            phase: AfterStreamPhase::Category,
+            cap,
+            ends_on_convergence: phases.ends_on_convergence,
             // The first chunk runs even for zero iterations: it creates the category fields.
-            let started = done > 0 || self.category_phase_started;
-            if progress.category_end.is_some() || (done >= total && started) {
-                return true;
-            }
-            self.category_phase_started = true;
-            let n = CHUNK_STEPS.min(total - done);
-            self.world.resource_mut::<CategoryFields>().pending += n;
-            self.world.resource_mut::<TrainingQueue>().pending += n;
-            self.category_training.run(&mut self.world);
-            let schedule = self.world.resource::<TrainingSchedule>();
-            let planned = if phases.ends_on_convergence {
-                schedule.planned_objects + schedule.planned_categories
-            } else {
-                usize::MAX
-            };
-            let end = PhaseEnd::of(done + n, total, planned);
-            let mut progress = self.world.resource_mut::<PhaseProgress>();
-            progress.category_steps += n;
-            progress.category_end = end;
-            if on_chunk(done + n, total).is_break() {
-                return end.is_some();
-            }
-        }
+            runs_once_at_least: !started,
+        };
+        self.run_phase_chunks(chunks, on_chunk, |mapper, n| {
+            mapper.category_phase_started = true;
+            mapper.world.resource_mut::<CategoryFields>().pending += n;
+            mapper.world.resource_mut::<TrainingQueue>().pending += n;
+            mapper.category_training.run(&mut mapper.world);
+            let schedule = mapper.world.resource::<TrainingSchedule>();
+            schedule.planned_objects + schedule.planned_categories
+        })
     }
 
     /// How the fields have trained so far: the schedule, each field's steps and state, and why

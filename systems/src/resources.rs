@@ -125,6 +125,35 @@ pub struct PhaseProgress {
     pub category_end: Option<catmap::training::PhaseEnd>,
 }
 
+/// The phases after the stream, as [`PhaseProgress`] keeps them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AfterStreamPhase {
+    /// The training after the stream (offline training, refinement, or the fast schedule's phase).
+    First,
+    /// The category phase.
+    Category,
+}
+
+impl PhaseProgress {
+    /// Steps done in `phase` and why it ended, once it has.
+    pub fn of(&self, phase: AfterStreamPhase) -> (u64, Option<catmap::training::PhaseEnd>) {
+        match phase {
+            AfterStreamPhase::First => (self.after_stream_steps, self.after_stream_end),
+            AfterStreamPhase::Category => (self.category_steps, self.category_end),
+        }
+    }
+
+    /// Records `steps` more steps of `phase`, and why it ended (`None`: it goes on).
+    pub fn advance(&mut self, phase: AfterStreamPhase, steps: u64, end: Option<catmap::training::PhaseEnd>) {
+        let (done, ended) = match phase {
+            AfterStreamPhase::First => (&mut self.after_stream_steps, &mut self.after_stream_end),
+            AfterStreamPhase::Category => (&mut self.category_steps, &mut self.category_end),
+        };
+        *done += steps;
+        *ended = end;
+    }
+}
+
 /// The step scheduler (which fields take the next steps; each field's steps and losses) and
 /// the size of its latest plans.
 #[derive(Resource, Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]

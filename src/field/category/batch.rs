@@ -11,10 +11,10 @@
 use rayon::prelude::*;
 
 use super::super::adamw::AdamWConfig;
+use super::super::adamw::scaled_optimisers;
 use super::super::batch::CHUNK_SAMPLES;
 use super::super::loss::{FieldLosses, LossNorm};
 use super::super::simd::Backend;
-use super::super::adamw::scaled_optimisers;
 use super::super::tasks::{Task, TaskPool, plan_tasks, tasks_by_field, update_active};
 use super::model::CategoryField;
 use super::net::{CategoryNet, CategoryScratch};
