@@ -312,3 +312,38 @@ fn two_spheres_train_into_two_shapes_of_one_category() {
     let green = mean(&colour.iter().map(|c| c[1] - c[0]).collect::<Vec<_>>());
     assert!(green > 0.2, "the larger sphere is green at its surface ({green})");
 }
+
+#[test]
+fn a_scaled_category_step_trains_each_category_at_its_own_learning_rate() {
+    let backend = Backend::detect();
+    let (mut scaled, samples) = setup(5, &[2, 3], 8, 24, 6, backend);
+    let (base, _) = setup(5, &[2, 3], 8, 24, 6, backend);
+    scaled
+        .train_step_scaled(&[0, 1], &[0.3, 1.0], &samples)
+        .expect("valid step");
+    let mut slowed = CategoryBatch::with_backend(
+        AdamWConfig {
+            lr: AdamWConfig::default().lr * 0.3,
+            ..AdamWConfig::default()
+        },
+        backend,
+    );
+    let mut full = CategoryBatch::with_backend(AdamWConfig::default(), backend);
+    for field in base.fields() {
+        slowed.push(field.clone());
+        full.push(field.clone());
+    }
+    slowed.train_step(&samples).expect("valid step");
+    full.train_step(&samples).expect("valid step");
+    assert_eq!(
+        scaled.fields()[0],
+        slowed.fields()[0],
+        "category 0 (weights and codes) at 0.3 × the rate"
+    );
+    assert_eq!(scaled.fields()[1], full.fields()[1], "category 1 at the full rate");
+    assert_ne!(scaled.fields()[0], full.fields()[0]);
+    let err = scaled
+        .train_step_scaled(&[0, 1], &[1.0], &samples)
+        .expect_err("one scale for two categories");
+    assert!(err.to_string().contains("scale"), "{err}");
+}
