@@ -21,30 +21,6 @@ use serde::{Deserialize, Serialize};
 use super::facts::{FieldFacts, FieldKey, FieldRole, Sighting, StreamPhase};
 use super::plateau::{LossWindow, PlateauConfig};
 
-/// Why a training phase ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum PhaseEnd {
-    /// No field gained from more steps (every one converged or frozen).
-    Converged,
-    /// The phase's step cap was reached.
-    StepCap,
-}
-
-impl PhaseEnd {
-    /// Whether a phase that has run `done` of at most `cap` steps ends, given how many fields
-    /// its latest plan trained (`planned`; none = nothing gains from more steps).
-    pub fn of(done: u64, cap: u64, planned: usize) -> Option<Self> {
-        if planned == 0 {
-            Some(Self::Converged)
-        } else if done >= cap {
-            Some(Self::StepCap)
-        } else {
-            None
-        }
-    }
-}
-
 /// How steps are given out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -96,6 +72,17 @@ impl Default for FieldProgress {
     }
 }
 
+/// The fields of a batch that take the next steps, ascending by batch index.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BatchPlan {
+    /// Their batch indices.
+    pub indices: Vec<usize>,
+    /// Their keys, in the same order.
+    pub keys: Vec<FieldKey>,
+    /// Their learning-rate factors, in the same order.
+    pub learning_rate_scales: Vec<f32>,
+}
+
 /// Plans training steps field by field (see the module doc).
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct StepScheduler {
@@ -128,14 +115,14 @@ impl StepScheduler {
     }
 
     /// [`StepScheduler::plan`] for fields that sit at batch indices: `facts` pairs each field's
-    /// index with its facts; returns the planned fields as (index, key), ascending by index —
-    /// what a batched step takes.
+    /// index with its facts; returns the planned fields ascending by index, with their keys and
+    /// learning-rate factors — what a batched step takes.
     pub fn plan_batch(
         &mut self,
         facts: &[(usize, FieldFacts)],
         policy: SchedulePolicy,
         plateau: &PlateauConfig,
-    ) -> Vec<(usize, FieldKey)> {
+    ) -> BatchPlan {
         let plain: Vec<FieldFacts> = facts.iter().map(|(_, f)| *f).collect();
         let plan = self.plan(&plain, policy, plateau);
         let mut planned: Vec<(usize, FieldKey)> = facts
@@ -144,7 +131,14 @@ impl StepScheduler {
             .map(|(index, f)| (*index, f.key))
             .collect();
         planned.sort_unstable();
-        planned
+        BatchPlan {
+            indices: planned.iter().map(|(index, _)| *index).collect(),
+            keys: planned.iter().map(|(_, key)| *key).collect(),
+            learning_rate_scales: planned
+                .iter()
+                .map(|(_, key)| self.learning_rate_scale(*key, plateau))
+                .collect(),
+        }
     }
 
     /// Records that `key` took one step with total loss `loss`.
@@ -380,13 +374,6 @@ mod tests {
     }
 
     #[test]
-    fn a_phase_ends_when_nothing_trains_or_at_its_cap() {
-        assert_eq!(PhaseEnd::of(50, 100, 3), None);
-        assert_eq!(PhaseEnd::of(100, 100, 3), Some(PhaseEnd::StepCap));
-        assert_eq!(PhaseEnd::of(50, 100, 0), Some(PhaseEnd::Converged));
-    }
-
-    #[test]
     fn a_batch_plan_lists_the_planned_fields_by_batch_index() {
         let mut scheduler = StepScheduler::default();
         let facts = [
@@ -396,7 +383,11 @@ mod tests {
         ];
         assert_eq!(
             scheduler.plan_batch(&facts, SchedulePolicy::Fast, &PLATEAU),
-            [(1, FieldKey::Object(ObjectId(8))), (2, FieldKey::Object(ObjectId(7)))]
+            BatchPlan {
+                indices: vec![1, 2],
+                keys: vec![FieldKey::Object(ObjectId(8)), FieldKey::Object(ObjectId(7))],
+                learning_rate_scales: vec![1.0, 1.0],
+            }
         );
     }
     #[test]

@@ -232,15 +232,11 @@ pub fn train_category_fields(
         .enumerate()
         .collect();
     let schedule = &mut *schedule;
-    let planned = schedule
+    let plan = schedule
         .scheduler
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
-    schedule.planned_categories = planned.len();
-    let active: Vec<usize> = planned.iter().map(|(k, _)| *k).collect();
-    let scales: Vec<f32> = planned
-        .iter()
-        .map(|(_, key)| schedule.scheduler.learning_rate_scale(*key, &config.schedule.plateau))
-        .collect();
+    schedule.planned_categories = plan.indices.len();
+    let active = &plan.indices;
     let objects = objects.iter().count();
     let member_count: usize = fields.members.iter().map(Vec::len).sum();
     let categories = fields.members.len() + objects.saturating_sub(member_count);
@@ -281,9 +277,12 @@ pub fn train_category_fields(
                 tracing::warn!(field, member, error = %e, "member rays skipped");
             }
         }
-        match fields.batch.train_step_scaled(&active, &scales, &samples) {
+        match fields
+            .batch
+            .train_step_scaled(active, &plan.learning_rate_scales, &samples)
+        {
             Ok(losses) => {
-                for (&(k, key), loss) in planned.iter().zip(losses) {
+                for ((&k, &key), loss) in active.iter().zip(&plan.keys).zip(losses) {
                     fields.losses[k] = loss.total;
                     schedule.scheduler.record(key, loss.total, &config.schedule.plateau);
                 }

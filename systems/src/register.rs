@@ -33,8 +33,8 @@ struct Ready {
 
 /// Re-registers every class whose membership changed or whose members' clouds grew by more than
 /// `categories.reregister_growth` since its last registration (classes in id order). A member's
-/// uncertainty sphere is evaluated again only when its cloud or field changed materially; pairs
-/// registered before start from their previous alignment.
+/// uncertainty sphere is evaluated again only when its cloud or field changed materially; a pair
+/// registered before starts as `categories.registration_start` says.
 pub fn register_categories(
     settings: Res<Settings>,
     fields: Res<Fields>,

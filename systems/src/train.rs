@@ -140,29 +140,23 @@ pub fn train_fields(
         })
         .collect();
     let schedule = &mut *schedule;
-    let active = schedule
+    let plan = schedule
         .scheduler
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
-    schedule.planned_objects = active.len();
-    let indices: Vec<usize> = active.iter().map(|(i, _)| *i).collect();
-    let plateau = &config.schedule.plateau;
-    let scales: Vec<f32> = active
-        .iter()
-        .map(|(_, key)| schedule.scheduler.learning_rate_scale(*key, plateau))
-        .collect();
+    schedule.planned_objects = plan.indices.len();
     let fields = &mut *fields;
     for _ in 0..std::mem::take(&mut queue.pending) {
-        if !indices.is_empty() {
+        if !plan.indices.is_empty() {
             match train_one(
                 &mut owners,
                 FieldOwner::Objects,
-                &indices,
-                &scales,
+                &plan.indices,
+                &plan.learning_rate_scales,
                 &mut fields.objects,
                 &cfg.object_rays,
             ) {
                 Ok(losses) => {
-                    for ((_, key), loss) in active.iter().zip(losses) {
+                    for (key, loss) in plan.keys.iter().zip(losses) {
                         schedule.scheduler.record(*key, loss, &config.schedule.plateau);
                     }
                 }
