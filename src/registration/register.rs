@@ -6,8 +6,9 @@
 //!    the centroids; optionally one more start from the correspondence front end + TEASER++ back
 //!    end ([`robust_registration`]; rotation-independent, so computed once).
 //! 2. Coarse: every start runs trimmed ICP ([`icp_point_to_point`] with ρ = `keep_fraction`) at
-//!    the `search_gates_m` on clouds thinned to `search_voxel_m`, and is ranked by the trimmed
-//!    normalised one-way Chamfer distance ([`trimmed_normalised_chamfer`]).
+//!    the `search_gates_m` on clouds thinned to `search_voxel_m` (of the source, an even subset of
+//!    at most `search_points`), and is ranked by the trimmed normalised one-way Chamfer distance
+//!    ([`trimmed_normalised_chamfer`]) of the whole thinned source.
 //! 3. Fine: the `refined_candidates` best distinct poses run trimmed ICP at the `refine_gates_m`
 //!    and then METHOD's plain ICP (gate `icp_max_correspondence_m`) on clouds thinned to
 //!    `icp_voxel_m`; the smallest whole (untrimmed) one-way Chamfer distance wins (ties: lowest
@@ -120,15 +121,8 @@ pub fn register_to_representative<R: Rng + ?Sized>(
         max_iterations: iterations,
         keep_fraction: cfg.keep_fraction,
     };
-    let coarse_fits: Vec<(Isometry3<f64>, f32)> = starts
-        .par_iter()
-        .map(|start| {
-            let pose = cfg.search_gates_m.iter().fold(*start, |pose, &gate| {
-                coarse.refine(pose, &stage(gate, cfg.search_iterations))
-            });
-            (pose, coarse.score(&pose, cfg.keep_fraction))
-        })
-        .collect();
+    let search_source = stride_subset(&coarse.source, cfg.search_points);
+    let coarse_fits = coarse_search(&coarse, &search_source, &starts, cfg, &stage);
     let chosen = distinct_best(&coarse_fits, cfg.refined_candidates.max(1));
     let mut refined: Vec<(usize, Isometry3<f64>, f32)> = chosen
         .par_iter()
@@ -153,6 +147,32 @@ pub fn register_to_representative<R: Rng + ?Sized>(
             refined: refined.iter().map(|r| (r.0, r.2)).collect(),
         },
     )
+}
+
+/// Step 2 of the module doc: every start runs the coarse gates on `search_source` and is scored
+/// (trimmed) on the whole coarse source.
+fn coarse_search(
+    coarse: &Level,
+    search_source: &[Point3<f32>],
+    starts: &[Isometry3<f64>],
+    cfg: &RegistrationConfig,
+    stage: &(dyn Fn(f32, usize) -> IcpParams + Sync),
+) -> Vec<(Isometry3<f64>, f32)> {
+    starts
+        .par_iter()
+        .map(|start| {
+            let pose = cfg.search_gates_m.iter().fold(*start, |pose, &gate| {
+                coarse.refine_points(search_source, pose, &stage(gate, cfg.search_iterations))
+            });
+            (pose, coarse.score(&pose, cfg.keep_fraction))
+        })
+        .collect()
+}
+
+/// Every `ceil(len / max_points)`-th point: at most about `max_points` of `points`, spread evenly.
+fn stride_subset(points: &[Point3<f32>], max_points: usize) -> Vec<Point3<f32>> {
+    let stride = points.len().div_ceil(max_points.max(3)).max(1);
+    points.iter().step_by(stride).copied().collect()
 }
 
 /// The registration at `pose`, scored by METHOD's normalised one-way Chamfer distance of the whole
@@ -214,7 +234,11 @@ impl Level {
     }
 
     fn refine(&self, pose: Isometry3<f64>, params: &IcpParams) -> Isometry3<f64> {
-        icp_point_to_point(&self.source, &self.template, &self.index, pose, params).template_from_source
+        self.refine_points(&self.source, pose, params)
+    }
+
+    fn refine_points(&self, source: &[Point3<f32>], pose: Isometry3<f64>, params: &IcpParams) -> Isometry3<f64> {
+        icp_point_to_point(source, &self.template, &self.index, pose, params).template_from_source
     }
 
     /// Step 3 of the module doc from `start`: trimmed ICP at the `refine_gates_m`, then plain ICP.
@@ -394,5 +418,21 @@ pub fn front_end_correspondences<R: Rng + ?Sized>(
             };
             Ok(mutual_nearest_neighbours(&describe(source)?, &describe(template)?))
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_search_subset_is_an_even_stride_of_at_most_the_asked_points() {
+        let cloud: Vec<Point3<f32>> = (0..1_000).map(|i| Point3::new(i as f32, 0.0, 0.0)).collect();
+        let subset = stride_subset(&cloud, 400);
+        assert_eq!(subset.len(), 334, "stride 3");
+        assert!(subset.iter().enumerate().all(|(k, p)| p.x == (3 * k) as f32));
+        assert_eq!(stride_subset(&cloud, 1_000), cloud, "a cap at the size keeps every point");
+        assert_eq!(stride_subset(&cloud, usize::MAX), cloud);
+        assert_eq!(stride_subset(&cloud, 0).len(), 3, "never fewer than 3 points asked");
     }
 }
