@@ -102,7 +102,17 @@ impl<'a> ClassClouds<'a> {
     fn search(&self, source: ObjectId, template: ObjectId) -> Result<crate::registration::Registration> {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_stream((u64::from(source.0) << 32) | u64::from(template.0));
-        register_to_representative(self.cloud(source)?, self.cloud(template)?, self.cfg, &mut rng)
+        let started = std::time::Instant::now();
+        let found = register_to_representative(self.cloud(source)?, self.cloud(template)?, self.cfg, &mut rng)?;
+        tracing::debug!(
+            source = %source,
+            template = %template,
+            coarse_points = ?found.trace.coarse_points,
+            fine_points = ?found.trace.fine_points,
+            seconds = started.elapsed().as_secs_f64(),
+            "pair searched"
+        );
+        Ok(found)
     }
 }
 
