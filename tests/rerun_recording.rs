@@ -47,7 +47,8 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         // be split off into its own subcategory).
         config.categories.min_field_steps = 1;
         config.category_fields.enabled = true;
-        config.category_fields.iterations = 20;
+        // The default (fast) schedule: one short phase after the stream trains every field.
+        config.schedule.max_steps_after_stream = 20;
         let mut mapper = Mapper::new(config).expect("config");
         mapper.set_recording(rec);
         for position in 0..scene.len() {
@@ -56,7 +57,8 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         }
         mapper.end_stream();
         mapper.step();
-        assert_eq!(mapper.train_categories(|_, _| {}), 1, "one category field");
+        mapper.train_after_stream(|_, _| {});
+        assert_eq!(mapper.category_field_count(), 1, "one category field");
         let map = mapper.finish();
         assert!(map.objects.len() >= 3, "the small scene maps several objects");
     }

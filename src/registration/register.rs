@@ -431,7 +431,11 @@ mod tests {
         let subset = stride_subset(&cloud, 400);
         assert_eq!(subset.len(), 334, "stride 3");
         assert!(subset.iter().enumerate().all(|(k, p)| p.x == (3 * k) as f32));
-        assert_eq!(stride_subset(&cloud, 1_000), cloud, "a cap at the size keeps every point");
+        assert_eq!(
+            stride_subset(&cloud, 1_000),
+            cloud,
+            "a cap at the size keeps every point"
+        );
         assert_eq!(stride_subset(&cloud, usize::MAX), cloud);
         assert_eq!(stride_subset(&cloud, 0).len(), 3, "never fewer than 3 points asked");
     }
