@@ -3,6 +3,7 @@
 //!
 //! [`register_to_representative`] composes the pieces, one concept per file:
 //! - [`voxel_centroids`]: centroid voxel downsampling;
+//! - [`robust_start`]: METHOD's own front end + back end, as one optional start;
 //! - front ends: correspondence-free all-to-all pairs ([`consistency::all_to_all_pairs`]) or
 //!   FPFH descriptors ([`fpfh`], normals from [`normals`]) matched by mutual nearest neighbours;
 //! - the TEASER++ back end without scale ([`teaser`]): pairwise-length [`consistency`] graph,
@@ -25,6 +26,7 @@ pub mod icp;
 pub mod max_clique;
 pub mod normals;
 pub mod register;
+pub mod robust_start;
 pub mod scalar_tls;
 pub mod teaser;
 
@@ -32,4 +34,5 @@ pub use chamfer::{normalised_one_way_chamfer, one_way_chamfer};
 pub use cloud::voxel_centroids;
 pub use config::{FrontEnd, RegistrationConfig};
 pub use cube_rotations::cube_rotations;
-pub use register::{Registration, RegistrationTrace, RobustTrace, refine_registration, register_to_representative};
+pub use register::{Registration, RegistrationTrace, refine_registration, register_to_representative};
+pub use robust_start::{RobustTrace, front_end_correspondences};

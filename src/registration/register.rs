@@ -4,7 +4,7 @@
 //! 1. Starts: the 24 [`cube_rotations`] (the rotation of start k is C_kᵀ, i.e. C_k applied to the
 //!    template), optionally each composed with `twists` turns, with the translation that aligns
 //!    the centroids; optionally one more start from the correspondence front end + TEASER++ back
-//!    end ([`robust_registration`]; rotation-independent, so computed once).
+//!    end ([`super::robust_start`]; rotation-independent, so computed once).
 //! 2. Coarse: every start runs trimmed ICP ([`icp_point_to_point`] with ρ = `keep_fraction`) at
 //!    the `search_gates_m` on clouds thinned to `search_voxel_m` (of the source, an even subset of
 //!    at most `search_points`), and is ranked by the trimmed normalised one-way Chamfer distance
@@ -24,19 +24,15 @@
 //! (tens of ms per pair) and meets the trials in `tests/registration_trials.rs`.
 
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
-use rand::{Rng, RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand::{Rng, RngExt};
 use rayon::prelude::*;
 
+use super::RegistrationConfig;
 use super::chamfer::{normalised_one_way_chamfer, trimmed_normalised_chamfer};
 use super::cloud::{check_cloud, voxel_centroids};
-use super::consistency::{Correspondence, all_to_all_pairs};
 use super::cube_rotations::cube_rotations;
-use super::fpfh::{fpfh_descriptors, mutual_nearest_neighbours};
 use super::icp::{IcpParams, icp_point_to_point};
-use super::normals::pca_normals;
-use super::teaser::robust_registration;
-use super::{FrontEnd, RegistrationConfig};
+use super::robust_start::{RobustTrace, robust_start};
 use crate::error::Result;
 use crate::nearest::PointIndex;
 
@@ -83,17 +79,6 @@ pub struct RegistrationTrace {
     pub refined: Vec<(usize, f32)>,
 }
 
-/// Diagnostics of the front end + TEASER++ back end.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RobustTrace {
-    /// Putative correspondences.
-    pub correspondences: usize,
-    /// Size of the maximum clique.
-    pub clique_size: usize,
-    /// Whether the clique is proven maximum.
-    pub clique_proven_maximum: bool,
-}
-
 /// Registers `source` (a partial, noisy object cloud) to `template` (the representative's
 /// cloud) by the multi-start search of the module doc.
 ///
@@ -116,13 +101,8 @@ pub fn register_to_representative<R: Rng + ?Sized>(
     if let Some(Ok((pose, _))) = &robust {
         starts.push(*pose);
     }
-    let stage = |gate: f32, iterations: usize| IcpParams {
-        max_correspondence_m: gate,
-        max_iterations: iterations,
-        keep_fraction: cfg.keep_fraction,
-    };
     let search_source = stride_subset(&coarse.source, cfg.search_points);
-    let coarse_fits = coarse_search(&coarse, &search_source, &starts, cfg, &stage);
+    let coarse_fits = coarse_search(&coarse, &search_source, &starts, cfg);
     let chosen = distinct_best(&coarse_fits, cfg.refined_candidates.max(1));
     let mut refined: Vec<(usize, Isometry3<f64>, f32)> = chosen
         .par_iter()
@@ -156,13 +136,17 @@ fn coarse_search(
     search_source: &[Point3<f32>],
     starts: &[Isometry3<f64>],
     cfg: &RegistrationConfig,
-    stage: &(dyn Fn(f32, usize) -> IcpParams + Sync),
 ) -> Vec<(Isometry3<f64>, f32)> {
+    let stage = |gate: f32| IcpParams {
+        max_correspondence_m: gate,
+        max_iterations: cfg.search_iterations,
+        keep_fraction: cfg.keep_fraction,
+    };
     starts
         .par_iter()
         .map(|start| {
             let pose = cfg.search_gates_m.iter().fold(*start, |pose, &gate| {
-                coarse.refine_points(search_source, pose, &stage(gate, cfg.search_iterations))
+                coarse.refine_points(search_source, pose, &stage(gate))
             });
             (pose, coarse.score(&pose, cfg.keep_fraction))
         })
@@ -351,30 +335,6 @@ fn shift_translation(
     pose
 }
 
-/// The front end + TEASER++ back end estimate as one start (module doc, step 1).
-fn robust_start(
-    source: &[Point3<f32>],
-    template: &[Point3<f32>],
-    cfg: &RegistrationConfig,
-    seed: u64,
-) -> Result<(Isometry3<f64>, RobustTrace)> {
-    let source = voxel_centroids(source, cfg.voxel_m)?;
-    let template = voxel_centroids(template, cfg.voxel_m)?;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let correspondences = front_end_correspondences(&source, &template, cfg, &mut rng)?;
-    let estimate = robust_registration(&source, &template, &correspondences, cfg)?;
-    let pose = Isometry3::from_parts(
-        Translation3::from(estimate.translation),
-        UnitQuaternion::from_rotation_matrix(&estimate.rotation),
-    );
-    let trace = RobustTrace {
-        correspondences: estimate.correspondences,
-        clique_size: estimate.clique_size,
-        clique_proven_maximum: estimate.clique_proven_maximum,
-    };
-    Ok((pose, trace))
-}
-
 /// Indices of up to `count` fits with the smallest scores whose poses differ pairwise by more
 /// than 5° or 5 cm (ties: lower index first).
 fn distinct_best(fits: &[(Isometry3<f64>, f32)], count: usize) -> Vec<usize> {
@@ -394,31 +354,6 @@ fn distinct_best(fits: &[(Isometry3<f64>, f32)], count: usize) -> Vec<usize> {
         }
     }
     chosen
-}
-
-/// Putative correspondences between the downsampled clouds, by the configured front end.
-pub fn front_end_correspondences<R: Rng + ?Sized>(
-    source: &[Point3<f32>],
-    template: &[Point3<f32>],
-    cfg: &RegistrationConfig,
-    rng: &mut R,
-) -> Result<Vec<Correspondence>> {
-    match cfg.front_end {
-        FrontEnd::AllToAll => Ok(all_to_all_pairs(source.len(), template.len(), cfg.max_pairs, rng)),
-        FrontEnd::Fpfh => {
-            let describe = |points: &[Point3<f32>]| -> Result<_> {
-                let index = PointIndex::new(points)?;
-                let normals = pca_normals(points, &index, cfg.fpfh_normal_radius_voxels * cfg.voxel_m);
-                Ok(fpfh_descriptors(
-                    points,
-                    &normals,
-                    &index,
-                    cfg.fpfh_feature_radius_voxels * cfg.voxel_m,
-                ))
-            };
-            Ok(mutual_nearest_neighbours(&describe(source)?, &describe(template)?))
-        }
-    }
 }
 
 #[cfg(test)]
