@@ -2,6 +2,7 @@
 //! subcategories and each member's NOCS frame (METHOD.md §3–§4), as one pure function.
 
 mod config;
+mod pair_cache;
 mod pairs;
 
 use std::collections::BTreeMap;
@@ -12,6 +13,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 pub use config::{CategoryConfig, RegistrationStart};
+pub use pair_cache::{CachedPair, PairCache, PairVersions};
 pub use pairs::PairPoints;
 
 use crate::category::{Alignment, subcategorize};
@@ -29,6 +31,8 @@ pub struct MemberInput {
     pub id: ObjectId,
     /// Its observed cloud (world).
     pub cloud: Vec<Point3<f32>>,
+    /// The version of its observed cloud: changes whenever the cloud does (see [`PairCache`]).
+    pub cloud_version: u64,
     /// Its minimum-volume oriented box.
     pub bounds: OrientedBox,
     /// Reliable rays of its uncertainty sphere.
@@ -57,15 +61,26 @@ pub struct RegisteredSubcategory {
     pub members: BTreeMap<ObjectId, RegisteredMember>,
 }
 
+/// A class's registration: its subcategories, and every pair it answered.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ClassRegistration {
+    /// Subcategories in the order they were split off.
+    pub groups: Vec<RegisteredSubcategory>,
+    /// The pairs answered (for the next registration; see [`PairCache`]).
+    #[serde(default)]
+    pub pairs: PairCache,
+}
+
 /// Registers the members of one class; `seed` makes every random draw reproducible. `previous`
-/// is the class's last registration (empty the first time): a pair registered there starts from
-/// its previous alignment (see [`RegistrationStart`]).
+/// is the class's last registration (empty the first time): a pair whose two clouds have not
+/// changed since is answered as it was then, and a pair registered there starts from its previous
+/// alignment (see [`RegistrationStart`]).
 pub fn register_class(
     members: &[MemberInput],
-    previous: &[RegisteredSubcategory],
+    previous: &ClassRegistration,
     cfg: &CategoryConfig,
     seed: u64,
-) -> Result<Vec<RegisteredSubcategory>> {
+) -> Result<ClassRegistration> {
     if members.is_empty() {
         return Err(CatmapError::Degenerate("a class without members".into()));
     }
@@ -74,7 +89,16 @@ pub fn register_class(
         .map(|m| Ok((m.id, voxel_centroids(&m.cloud, cfg.cloud_voxel_m)?)))
         .collect::<Result<_>>()?;
     let sizes: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.cloud.len())).collect();
-    let pairs = ClassClouds::new(&clouds, &sizes, cfg, previous_alignments(previous), seed);
+    let versions: BTreeMap<ObjectId, u64> = members.iter().map(|m| (m.id, m.cloud_version)).collect();
+    let pairs = ClassClouds::new(
+        &clouds,
+        &sizes,
+        &versions,
+        &previous.pairs,
+        cfg,
+        previous_alignments(&previous.groups),
+        seed,
+    );
     let reliable: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.reliable_rays)).collect();
     let ids: Vec<ObjectId> = members.iter().map(|m| m.id).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -87,7 +111,7 @@ pub fn register_class(
         &mut rng,
     );
     let by_id: BTreeMap<ObjectId, &MemberInput> = members.iter().map(|m| (m.id, m)).collect();
-    groups
+    let groups = groups
         .into_iter()
         .map(|group| {
             let rep_frame = representative_frame(&by_id[&group.representative].bounds);
@@ -119,7 +143,11 @@ pub fn register_class(
                 members,
             })
         })
-        .collect()
+        .collect::<Result<_>>()?;
+    Ok(ClassRegistration {
+        groups,
+        pairs: pairs.into_answered(),
+    })
 }
 
 /// The stored alignment of every (member, representative) pair of a registration, with the
@@ -217,14 +245,32 @@ mod tests {
                 id: ObjectId(id),
                 bounds: fit_minimum_volume_box(&trial.source).unwrap(),
                 cloud: trial.source,
+                cloud_version: 1,
                 reliable_rays: 10 - id as usize,
             }
         })
         .collect()
     }
 
-    fn groups(registered: &[RegisteredSubcategory]) -> Vec<(ObjectId, Vec<ObjectId>)> {
+    /// The same members after their clouds changed (new versions of the same points), so that no
+    /// pair is answered from the cache.
+    fn touched(members: &[MemberInput]) -> Vec<MemberInput> {
+        members
+            .iter()
+            .map(|m| MemberInput {
+                cloud_version: m.cloud_version + 1,
+                ..m.clone()
+            })
+            .collect()
+    }
+
+    fn first_time() -> ClassRegistration {
+        ClassRegistration::default()
+    }
+
+    fn groups(registered: &ClassRegistration) -> Vec<(ObjectId, Vec<ObjectId>)> {
         registered
+            .groups
             .iter()
             .map(|g| (g.representative, g.members.keys().copied().collect()))
             .collect()
@@ -240,7 +286,7 @@ mod tests {
     #[test]
     fn a_warm_re_registration_keeps_the_full_searchs_groups_and_scores() {
         let members = three_members();
-        let first = register_class(&members, &[], &starting(RegistrationStart::Search), 7).unwrap();
+        let first = register_class(&members, &first_time(), &starting(RegistrationStart::Search), 7).unwrap();
         assert_eq!(
             groups(&first),
             vec![
@@ -249,11 +295,11 @@ mod tests {
             ],
             "the chair copies share a subcategory, the table does not"
         );
-        let again = register_class(&members, &first, &starting(RegistrationStart::Warm), 7).unwrap();
+        let again = register_class(&touched(&members), &first, &starting(RegistrationStart::Warm), 7).unwrap();
         assert_eq!(groups(&again), groups(&first));
         let (cold, warm) = (
-            first[0].members[&ObjectId(2)].alignment.chamfer,
-            again[0].members[&ObjectId(2)].alignment.chamfer,
+            first.groups[0].members[&ObjectId(2)].alignment.chamfer,
+            again.groups[0].members[&ObjectId(2)].alignment.chamfer,
         );
         assert!(
             warm_start_holds(warm, cold, CategoryConfig::default().warm_start_tolerance),
@@ -264,19 +310,60 @@ mod tests {
     #[test]
     fn a_warm_start_that_scores_worse_falls_back_to_the_full_search() {
         let members = three_members();
-        let first = register_class(&members, &[], &starting(RegistrationStart::Search), 7).unwrap();
+        let first = register_class(&members, &first_time(), &starting(RegistrationStart::Search), 7).unwrap();
         // A stored alignment half a turn off, with the good score: the warm start cannot reach it.
         let mut wrong = first.clone();
-        let member = wrong[0].members.get_mut(&ObjectId(2)).unwrap();
+        let member = wrong.groups[0].members.get_mut(&ObjectId(2)).unwrap();
         member.alignment.template_from_object =
             Isometry3::rotation(nalgebra::Vector3::new(0.0, 0.0, std::f32::consts::PI))
                 * member.alignment.template_from_object;
-        let again = register_class(&members, &wrong, &starting(RegistrationStart::Warm), 7).unwrap();
+        let again = register_class(&touched(&members), &wrong, &starting(RegistrationStart::Warm), 7).unwrap();
         assert_eq!(groups(&again), groups(&first));
         assert_eq!(
-            again[0].members[&ObjectId(2)].alignment.chamfer,
-            first[0].members[&ObjectId(2)].alignment.chamfer,
+            again.groups[0].members[&ObjectId(2)].alignment.chamfer,
+            first.groups[0].members[&ObjectId(2)].alignment.chamfer,
             "the full search's result"
+        );
+    }
+
+    #[test]
+    fn pairs_on_unchanged_clouds_are_answered_as_before_and_only_they() {
+        let members = three_members();
+        let search = starting(RegistrationStart::Search);
+        let first = register_class(&members, &first_time(), &search, 7).unwrap();
+        // Table → chair representative (rejected) and chair → chair (joined): both answered.
+        assert_eq!(first.pairs.len(), 2, "{:?}", first.pairs.0.keys());
+        // An impossible answer planted in the cache shows whether a pair was searched again.
+        let mut planted = first.clone();
+        for cached in planted.pairs.0.values_mut() {
+            cached.chamfer = 1e-6;
+        }
+        let again = register_class(&members, &planted, &search, 7).unwrap();
+        assert_eq!(
+            again.pairs, planted.pairs,
+            "no cloud changed: every pair from the cache"
+        );
+        assert_eq!(
+            groups(&again),
+            vec![(ObjectId(1), members.iter().map(|m| m.id).collect())]
+        );
+
+        let mut table_moved = members.clone();
+        table_moved[2].cloud_version += 1;
+        let after = register_class(&table_moved, &planted, &search, 7).unwrap();
+        assert_eq!(groups(&after), groups(&first), "the table's pair searched again");
+        let chair_pair = (ObjectId(2), ObjectId(1));
+        assert_eq!(
+            after.pairs.0[&chair_pair], planted.pairs.0[&chair_pair],
+            "the chairs' pair kept"
+        );
+        assert_eq!(
+            after.pairs.0[&(ObjectId(3), ObjectId(1))],
+            CachedPair {
+                versions: PairVersions { source: 2, template: 1 },
+                ..first.pairs.0[&(ObjectId(3), ObjectId(1))]
+            },
+            "searched anew: exactly the first search's answer"
         );
     }
 
@@ -320,8 +407,8 @@ mod tests {
     #[test]
     fn a_reused_pair_keeps_its_alignment_until_a_cloud_grows() {
         let members = three_members();
-        let first = register_class(&members, &[], &starting(RegistrationStart::Search), 7).unwrap();
-        let chair = |groups: &[RegisteredSubcategory]| groups[0].members[&ObjectId(2)];
+        let first = register_class(&members, &first_time(), &starting(RegistrationStart::Search), 7).unwrap();
+        let chair = |registered: &ClassRegistration| registered.groups[0].members[&ObjectId(2)];
         let found = chair(&first).found_at.expect("a searched pair records its cloud sizes");
         assert_eq!(
             found,
@@ -330,9 +417,13 @@ mod tests {
                 template: members[0].cloud.len()
             }
         );
-        assert_eq!(first[0].members[&ObjectId(1)].found_at, None, "the representative");
+        assert_eq!(
+            first.groups[0].members[&ObjectId(1)].found_at,
+            None,
+            "the representative"
+        );
         let reuse = starting(RegistrationStart::Reuse);
-        let again = register_class(&members, &first, &reuse, 7).unwrap();
+        let again = register_class(&touched(&members), &first, &reuse, 7).unwrap();
         assert_eq!(groups(&again), groups(&first));
         let (kept, searched) = (chair(&again), chair(&first));
         assert_eq!(
@@ -358,6 +449,7 @@ mod tests {
             .map(|p| p + nalgebra::Vector3::new(0.001, 0.0, 0.0))
             .collect();
         grown[1].cloud.extend(extra);
+        grown[1].cloud_version += 1;
         let after = register_class(&grown, &again, &reuse, 7).unwrap();
         assert_eq!(groups(&after), groups(&first));
         assert_eq!(
@@ -365,7 +457,7 @@ mod tests {
             Some(grown[1].cloud.len()),
             "searched at the grown size"
         );
-        let searched = register_class(&grown, &[], &starting(RegistrationStart::Search), 7).unwrap();
+        let searched = register_class(&grown, &first_time(), &starting(RegistrationStart::Search), 7).unwrap();
         assert_eq!(chair(&after), chair(&searched), "exactly the full search's result");
     }
 }

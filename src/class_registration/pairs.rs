@@ -10,6 +10,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::config::RegistrationStart;
+use super::pair_cache::{CachedPair, PairCache, PairVersions};
 use super::warm_start_holds;
 use crate::category::{Alignment, PairRegistration};
 use crate::error::{CatmapError, Result};
@@ -45,6 +46,10 @@ pub(super) struct ClassClouds<'a> {
     pub clouds: &'a BTreeMap<ObjectId, Vec<Point3<f32>>>,
     /// Sizes of the members' observed clouds now.
     pub sizes: &'a BTreeMap<ObjectId, usize>,
+    /// Versions of the members' observed clouds now.
+    pub versions: &'a BTreeMap<ObjectId, u64>,
+    /// The pairs the class's previous registration answered.
+    pub cache: &'a PairCache,
     pub cfg: &'a RegistrationConfig,
     pub seed: u64,
     /// Where a pair registered before starts.
@@ -53,15 +58,18 @@ pub(super) struct ClassClouds<'a> {
     pub warm_tolerance: f32,
     /// `Reuse`: how much both clouds may have grown for an alignment to be kept.
     pub growth: f32,
-    /// The cloud sizes each answered pair's alignment was found at.
-    found_at: Mutex<BTreeMap<(ObjectId, ObjectId), PairPoints>>,
+    /// Every pair answered so far.
+    answered: Mutex<PairCache>,
 }
 
 impl<'a> ClassClouds<'a> {
-    /// Pairs over `clouds` (thinned) of members whose observed clouds have `sizes` now.
+    /// Pairs over `clouds` (thinned) of members whose observed clouds have `sizes` and
+    /// `versions` now.
     pub fn new(
         clouds: &'a BTreeMap<ObjectId, Vec<Point3<f32>>>,
         sizes: &'a BTreeMap<ObjectId, usize>,
+        versions: &'a BTreeMap<ObjectId, u64>,
+        cache: &'a PairCache,
         cfg: &'a super::CategoryConfig,
         previous: Previous,
         seed: u64,
@@ -69,13 +77,15 @@ impl<'a> ClassClouds<'a> {
         Self {
             clouds,
             sizes,
+            versions,
+            cache,
             cfg: &cfg.registration,
             seed,
             start: cfg.registration_start,
             previous,
             warm_tolerance: cfg.warm_start_tolerance,
             growth: cfg.reregister_growth,
-            found_at: Mutex::new(BTreeMap::new()),
+            answered: Mutex::new(PairCache::default()),
         }
     }
 
@@ -88,13 +98,42 @@ impl<'a> ClassClouds<'a> {
 
     /// The cloud sizes the alignment of `source` to `template` was found at, once answered.
     pub fn found_at(&self, source: ObjectId, template: ObjectId) -> Option<PairPoints> {
-        let found = self.found_at.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        found.get(&(source, template)).copied()
+        let answered = self.answered.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        answered.0.get(&(source, template)).map(|c| c.found_at)
     }
 
-    fn record(&self, source: ObjectId, template: ObjectId, points: PairPoints) {
-        let mut found = self.found_at.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        found.insert((source, template), points);
+    /// Every pair answered, for the next registration of the class.
+    pub fn into_answered(self) -> PairCache {
+        self.answered
+            .into_inner()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    fn versions_of(&self, source: ObjectId, template: ObjectId) -> PairVersions {
+        let version = |id| self.versions.get(&id).copied().unwrap_or(0);
+        PairVersions {
+            source: version(source),
+            template: version(template),
+        }
+    }
+
+    /// Keeps an answer and returns it.
+    fn record(
+        &self,
+        source: ObjectId,
+        template: ObjectId,
+        answer: (Isometry3<f32>, f32),
+        found_at: PairPoints,
+    ) -> (Isometry3<f32>, f32) {
+        let cached = CachedPair {
+            template_from_source: answer.0,
+            chamfer: answer.1,
+            versions: self.versions_of(source, template),
+            found_at,
+        };
+        let mut answered = self.answered.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        answered.0.insert((source, template), cached);
+        answer
     }
 
     /// The full multi-start search (one random stream per ordered pair, so results do not depend
@@ -124,6 +163,15 @@ impl PairRegistration for ClassClouds<'_> {
             source: size(source),
             template: size(template),
         };
+        if let Some(cached) = self
+            .cache
+            .unchanged(source, template, self.versions_of(source, template))
+        {
+            // Both clouds as they were: the search would return exactly this.
+            tracing::debug!(source = %source, template = %template, "pair unchanged");
+            let answer = (cached.template_from_source, cached.chamfer);
+            return Ok(self.record(source, template, answer, cached.found_at));
+        }
         let previous = self.previous.get(&(source, template));
         if self.start == RegistrationStart::Reuse
             && let Some((stored, Some(then))) = previous
@@ -133,15 +181,14 @@ impl PairRegistration for ClassClouds<'_> {
             let pose = stored.template_from_object;
             let aligned: Vec<Point3<f32>> = s.iter().map(|p| pose * p).collect();
             let score = normalised_one_way_chamfer(&aligned, t)?;
-            self.record(source, template, *then);
-            return Ok((pose, score));
+            return Ok(self.record(source, template, (pose, score), *then));
         }
         let warm = match previous {
             Some((stored, _)) if self.start == RegistrationStart::Warm => {
                 let warm = refine_registration(s, t, &stored.template_from_object, self.cfg)?;
                 if warm_start_holds(warm.score, stored.chamfer, self.warm_tolerance) {
-                    self.record(source, template, now);
-                    return Ok((warm.template_from_source(), warm.score));
+                    let answer = (warm.template_from_source(), warm.score);
+                    return Ok(self.record(source, template, answer, now));
                 }
                 Some(warm)
             }
@@ -152,8 +199,7 @@ impl PairRegistration for ClassClouds<'_> {
             Some(warm) if warm.score < full.score => warm,
             _ => full,
         };
-        self.record(source, template, now);
-        Ok((best.template_from_source(), best.score))
+        Ok(self.record(source, template, (best.template_from_source(), best.score), now))
     }
 
     fn reverse_chamfer(&self, source: ObjectId, template: ObjectId, template_from_source: &Isometry3<f32>) -> f32 {

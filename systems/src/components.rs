@@ -165,4 +165,7 @@ pub struct Subcategories {
     pub groups: Vec<catmap::class_registration::RegisteredSubcategory>,
     /// Cloud points of each member when registered.
     pub registered_points: BTreeMap<ObjectId, usize>,
+    /// Every pair the registration answered (a pair on unchanged clouds is not searched again).
+    #[serde(default)]
+    pub pairs: catmap::class_registration::PairCache,
 }

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use bevy_ecs::prelude::*;
-use catmap::class_registration::{MemberInput, RegisteredSubcategory, class_is_due, register_class};
+use catmap::class_registration::{ClassRegistration, MemberInput, class_is_due, register_class};
 use catmap::mesh::Aabb;
 use catmap::rng::{RngStream, seeded_rng};
 use catmap::uncertainty::{UncertaintyStamp, object_reliability};
@@ -24,6 +24,7 @@ struct Ready {
     entity: Entity,
     id: ObjectId,
     cloud: Vec<Point3<f32>>,
+    cloud_version: u64,
     bounds: catmap::oriented_box::OrientedBox,
     slot: FieldSlot,
     stamp: UncertaintyStamp,
@@ -56,7 +57,7 @@ pub fn register_categories(
         return;
     }
     let steps_needed = cfg.field_steps_before_registration(&settings.0.fields);
-    let mut due: Vec<(Entity, ClassId, Vec<Ready>, Vec<RegisteredSubcategory>)> = Vec::new();
+    let mut due: Vec<(Entity, ClassId, Vec<Ready>, ClassRegistration)> = Vec::new();
     for (entity, category, previous) in &categories {
         let mut ready = Vec::new();
         for id in &category.members {
@@ -72,6 +73,7 @@ pub fn register_categories(
                 entity: index.0[&object.id],
                 id: object.id,
                 cloud: Vec::new(), // filled only when the class is due
+                cloud_version: cloud.0.points_added(),
                 bounds: bounds.oriented_box,
                 slot: *slot,
                 stamp: UncertaintyStamp {
@@ -95,15 +97,18 @@ pub fn register_categories(
                     r.cloud = cloud.0.points();
                 }
             }
-            let previous_groups = previous.map_or_else(Vec::new, |p| p.groups.clone());
-            due.push((entity, category.class, ready, previous_groups));
+            let previous = previous.map_or_else(ClassRegistration::default, |p| ClassRegistration {
+                groups: p.groups.clone(),
+                pairs: p.pairs.clone(),
+            });
+            due.push((entity, category.class, ready, previous));
         }
     }
     if due.is_empty() {
         return;
     }
     let seed = settings.0.seed;
-    for (category_entity, class, ready, previous_groups) in due {
+    for (category_entity, class, ready, previous) in due {
         // Uncertainty spheres (only needed to rank several members; kept while they still hold).
         let started = Instant::now();
         let reliabilities: Vec<Option<Reliability>> = if ready.len() > 1 {
@@ -142,15 +147,16 @@ pub fn register_categories(
             .map(|(r, rel)| MemberInput {
                 id: r.id,
                 cloud: r.cloud.clone(),
+                cloud_version: r.cloud_version,
                 bounds: r.bounds,
                 reliable_rays: rel.as_ref().map_or(0, |x| x.sphere.reliable_rays),
             })
             .collect();
         let class_seed = seed ^ (u64::from(class.0) << 32);
-        let registered = register_class(&inputs, &previous_groups, cfg, class_seed);
+        let registered = register_class(&inputs, &previous, cfg, class_seed);
         times.add("register", started.elapsed());
-        let groups = match registered {
-            Ok(groups) => groups,
+        let ClassRegistration { groups, pairs } = match registered {
+            Ok(registered) => registered,
             Err(e) => {
                 tracing::warn!(class = %class, error = %e, "class registration failed");
                 continue;
@@ -184,6 +190,7 @@ pub fn register_categories(
         let record = Subcategories {
             groups,
             registered_points,
+            pairs,
         };
         match categories.get_mut(category_entity) {
             Ok((_, _, Some(mut previous))) => *previous = record,
