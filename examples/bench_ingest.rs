@@ -86,10 +86,11 @@ fn main() -> anyhow::Result<()> {
     let source: Arc<dyn FrameSource> = Arc::new(open()?);
     let frames = source.len();
     let (w, h) = (source.intrinsics().width, source.intrinsics().height);
-    let config = MapperConfig {
+    let mut config = MapperConfig {
         fields: catmap::config::FieldConfig::disabled(),
         ..MapperConfig::default()
     };
+    config.category_fields.enabled = false; // ingest only
     let started = Instant::now();
     let stream = FrameStream::spawn(
         source,

@@ -178,6 +178,7 @@ fn run(args: &Args) -> anyhow::Result<()> {
     let mut config = MapperConfig::default();
     config.fields.steps_per_frame = args.steps_per_frame;
     config.categories.enabled = args.categories == Switch::On;
+    config.category_fields.enabled = config.categories.enabled;
     let capacity = config.stream.channel_capacity.max(1);
     say(&format!(
         "long stream: {} frames of {}×{}, {} training steps per frame, categories {:?}, channel capacity {capacity}, {} threads",

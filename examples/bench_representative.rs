@@ -66,6 +66,7 @@ fn check_scene(seed: u64, args: &Args) -> anyhow::Result<(usize, usize)> {
         ..MapperConfig::default()
     };
     config.categories.enabled = true;
+    config.category_fields.enabled = false; // the representatives only
     let mut mapper = Mapper::new(config)?;
     for position in (0..scene.len()).step_by(args.stride.max(1)) {
         mapper.push(scene.read_frame(position)?)?;

@@ -27,6 +27,7 @@ fn map_default_scene() -> (SyntheticScene, Vec<ClassRecord>, BTreeMap<String, f6
         ..MapperConfig::default()
     };
     config.categories.enabled = true;
+    config.category_fields.enabled = false; // registration only
     let mut mapper = common::mapping::map_scene(&scene, (0..scene.len()).step_by(2), config);
     let records = mapper.category_records();
     let stages = mapper.stage_seconds();

@@ -23,6 +23,7 @@ fn cheap_config(steps_per_frame: usize) -> MapperConfig {
         },
         ..MapperConfig::default()
     };
+    config.category_fields.enabled = false; // the per-object fields alone
     config.meshes.preview_every_frames = 0;
     config.meshes.object.voxel_size_m = 0.02;
     config.meshes.background_voxel_m = 0.2;

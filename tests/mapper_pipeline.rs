@@ -35,11 +35,13 @@ impl Pipeline {
     }
 
     fn default_config() -> MapperConfig {
-        MapperConfig {
+        let mut config = MapperConfig {
             seed: SEED,
             fields: catmap::config::FieldConfig::disabled(),
             ..MapperConfig::default()
-        }
+        };
+        config.category_fields.enabled = false; // no fields: nothing to share
+        config
     }
 
     fn frame_count(&self) -> usize {

@@ -17,9 +17,10 @@ pub enum CategoryRayBudget {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CategoryFieldConfig {
-    /// Train one shared field per subcategory with more than one member (category mode). Needs
-    /// `categories.enabled`; single-member subcategories keep their per-object fields. `catmap run`
-    /// sets it from `--mode` (category, the default: on; instance: off).
+    /// Train one shared field per subcategory with more than one member (category mode, the
+    /// paper's method: on by default). Needs `categories.enabled`; single-member subcategories
+    /// keep their per-object fields. `catmap run --mode instance` turns it off (the vMAP*
+    /// baseline: one field per object).
     pub enabled: bool,
     /// Steps of the category fields once the classes are registered (the paper's 10⁴; the paper
     /// schedule, and the offline protocol's cap).
@@ -35,7 +36,7 @@ pub struct CategoryFieldConfig {
 impl Default for CategoryFieldConfig {
     fn default() -> Self {
         Self {
-            enabled: false,
+            enabled: true,
             iterations: 10_000,
             code_dim: 32,
             rays_per_object: 120,

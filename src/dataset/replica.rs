@@ -152,7 +152,7 @@ impl ReplicaSequence {
         if !dir.is_dir() {
             return Err(CatmapError::layout(
                 dir,
-                "Replica sequence folder does not exist or is not a folder",
+                "no such folder (the dataset: a sequence in Replica's layout, see `catmap run --help`)",
             ));
         }
         check_depth_options(options.depth_scale, options.max_depth_m)?;
@@ -160,6 +160,9 @@ impl ReplicaSequence {
             return Err(CatmapError::Config(format!("camera: {problem}")));
         }
         let depth_dir = dir.join("depth");
+        if !depth_dir.is_dir() {
+            return Err(CatmapError::layout(&dir, not_replica_layout(&dir)));
+        }
         let indices: Vec<u64> = numbered_files(&depth_dir, "depth_", ".png")?
             .into_iter()
             .map(|(i, _)| i)
@@ -282,6 +285,22 @@ impl FrameSource for ReplicaSequence {
     fn name(&self) -> String {
         self.dir.display().to_string()
     }
+}
+
+/// What a folder without `depth/` lacks, what the Replica layout is, and what to try.
+fn not_replica_layout(dir: &Path) -> String {
+    let looks_like_scannet = ["color", "pose", "instance-filt"].iter().all(|f| dir.join(f).is_dir());
+    let hint = if looks_like_scannet {
+        "this looks like a ScanNet export: try `--format scannet`"
+    } else {
+        "a ScanNet export (color/, depth/, pose/, instance-filt/, label-filt/) opens with \
+         `--format scannet`; `catmap synth --out DIR` writes an example of this layout"
+    };
+    format!(
+        "not a sequence in Replica's (vMAP's) layout: no depth/ folder. Expected depth/depth_<i>.png, \
+         rgb/rgb_<i>.png, semantic_class/semantic_class_<i>.png, \
+         semantic_instance/semantic_instance_<i>.png and traj_w_c.txt (intrinsics.json optional); {hint}"
+    )
 }
 
 #[cfg(test)]

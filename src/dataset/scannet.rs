@@ -137,7 +137,15 @@ fn require_dir(dir: &Path, what: &str) -> Result<()> {
     if dir.is_dir() {
         Ok(())
     } else {
-        Err(CatmapError::layout(dir, format!("{what} folder does not exist")))
+        Err(CatmapError::layout(
+            dir,
+            format!(
+                "{what} folder does not exist. A ScanNet sequence (SensReader output with its 2D \
+                 labels) has color/, depth/, pose/, instance-filt/, label-filt/ and \
+                 intrinsic/intrinsic_depth.txt; a folder in Replica's layout (depth/, rgb/, \
+                 semantic_class/, semantic_instance/, traj_w_c.txt) opens with `--format replica`"
+            ),
+        ))
     }
 }
 

@@ -5,10 +5,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use catmap::synth::Preset;
 use catmap_systems::Mapper;
 
-use crate::cli_synth::write_scene;
+use crate::cli_synth::{PresetArg, write_scene};
 use crate::run_plan::{Recording, RunPlan};
 
 /// Arguments of `catmap run`.
@@ -17,6 +16,10 @@ pub struct RunArgs {
     /// Dataset folder; without it the default synthetic scene is written to OUT/scene and mapped.
     #[arg(long)]
     pub dataset: Option<PathBuf>,
+    /// Without --dataset: the synthetic scene written to OUT/scene and mapped (`small`: a quick
+    /// look in about a minute).
+    #[arg(long, value_enum, default_value_t = PresetArg::Default, conflicts_with = "dataset")]
+    pub preset: PresetArg,
     /// Layout of the dataset folder.
     #[arg(long, value_enum, default_value_t = DatasetFormat::Replica)]
     pub format: DatasetFormat,
@@ -29,18 +32,21 @@ pub struct RunArgs {
     /// Output folder.
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
-    /// Seed of every random choice (overrides the config's).
+    /// Seed of every random choice [default: the config's `seed`, 0]
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Use every K-th frame.
+    /// Use every K-th frame [default: the config's `stream.stride`, 1]
     #[arg(long)]
     pub stride: Option<usize>,
-    /// Map at most N frames.
+    /// Map at most N frames [default: every frame]
     #[arg(long)]
     pub max_frames: Option<usize>,
     /// Save the Rerun recording here (default: OUT/recording.rrd unless --rerun-connect is given).
     #[arg(long)]
     pub rerun_save: Option<PathBuf>,
+    /// Write no Rerun recording (it is ~18 MB for the small preset, ~100 MB for the default scene).
+    #[arg(long, conflicts_with_all = ["rerun_save", "rerun_connect"])]
+    pub no_recording: bool,
     /// Stream to a running Rerun viewer (default address: rerun+http://127.0.0.1:9876/proxy).
     #[arg(long, num_args = 0..=1, default_missing_value = "rerun+http://127.0.0.1:9876/proxy")]
     pub rerun_connect: Option<String>,
@@ -50,22 +56,27 @@ pub struct RunArgs {
     /// Offline protocol: read every frame first, then train (`fields.offline_iterations` steps).
     #[arg(long)]
     pub offline: bool,
-    /// Training steps of the offline protocol (overrides `fields.offline_iterations`).
+    /// Training steps of the offline protocol [default: the config's `fields.offline_iterations`,
+    /// 15000]
     #[arg(long)]
     pub iterations: Option<usize>,
-    /// Category mode: steps of the category fields (overrides `category_fields.iterations`).
+    /// Category mode: steps of the category fields under the paper schedule [default: the config's
+    /// `category_fields.iterations`, 10000]
     #[arg(long)]
     pub category_iterations: Option<usize>,
-    /// How a class's representative is chosen (ablation: random).
+    /// How a class's representative is chosen (ablation: random) [default: the config's
+    /// `categories.representative`, uncertainty]
     #[arg(long, value_enum)]
     pub representative: Option<Representative>,
     /// Training schedule: fast (the default: train only what changes the map — fields seen in the
     /// new frame or still improving — and stop what has converged) or paper (the paper's fixed
     /// protocol, every field on every step: ~3.7× the time, better completion of objects seen
-    /// from one side only). Offline runs always follow paper.
+    /// from one side only). Offline runs always follow paper [default: the config's
+    /// `schedule.policy`, fast]
     #[arg(long, value_enum)]
     pub schedule: Option<ScheduleArg>,
-    /// Split classes into subcategories (ablation: off).
+    /// Split classes into subcategories (ablation: off) [default: the config's
+    /// `categories.subcategories.enabled`, on]
     #[arg(long, value_enum)]
     pub subcategories: Option<Switch>,
     /// Continue the interrupted run whose output folder is DIR (from `DIR/checkpoint`), with the
@@ -126,16 +137,12 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     }
     let started = Instant::now();
     let config = config_from_args(args)?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let dataset = match &args.dataset {
         Some(dir) => dir.clone(),
-        None => {
-            let dir = args.out.join("scene");
-            write_scene(config.seed, Preset::Default, &dir)?;
-            dir
-        }
+        None => args.out.join("scene"),
     };
     let recording = match &args.rerun_connect {
+        _ if args.no_recording => Recording::Off,
         Some(url) => {
             if let Some(path) = &args.rerun_save {
                 tracing::warn!(path = %path.display(), "--rerun-save is ignored with --rerun-connect");
@@ -163,7 +170,16 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         recording,
         seconds_before: 0.0,
     };
-    let source = plan.open_source(&config)?;
+    // A dataset is opened before anything is written, so that a run that cannot start leaves
+    // nothing behind.
+    let source = match &args.dataset {
+        Some(_) => plan.open_source(&config)?,
+        None => {
+            write_scene(config.seed, args.preset.into(), &plan.dataset)?;
+            plan.open_source(&config)?
+        }
+    };
+    std::fs::create_dir_all(&plan.out).with_context(|| format!("cannot create {}", plan.out.display()))?;
     // The reader thread starts in `drive`, from the mapper's stream position.
     let mapper = Mapper::with_inbox(config, crossbeam_channel::never())?;
     crate::run_phases::drive(mapper, plan, Arc::clone(&source), started)
@@ -243,6 +259,25 @@ mod tests {
         assert!(config.categories.enabled && config.category_fields.enabled);
         let cli = Cli::try_parse_from(["catmap"]).expect("arguments parse");
         assert_eq!(cli.args.mode, MapMode::Category);
+    }
+
+    #[test]
+    fn catmap_config_prints_the_defaults_the_command_line_uses_and_reads_back_as_them() {
+        let defaults = catmap::MapperConfig::default();
+        assert_eq!(
+            config_of(&[]),
+            defaults,
+            "the library's defaults are the command line's"
+        );
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("printed.toml");
+        std::fs::write(&path, defaults.to_toml()).expect("write the printed config");
+        let path = path.to_str().expect("a UTF-8 temp path");
+        assert_eq!(
+            config_of(&["--config", path]),
+            defaults,
+            "`catmap config > F; catmap run --config F`"
+        );
     }
 
     #[test]

@@ -24,9 +24,11 @@ pub struct SynthArgs {
 /// Scene presets on the command line.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PresetArg {
-    /// 160×120, ~30 frames, ~6 objects (tests).
+    /// 160×120, 30 frames, 6 objects (three identical chairs, a table, a stool, a lamp): tests
+    /// and the quick look.
     Small,
-    /// 640×480, 200–300 frames, 12–16 objects.
+    /// 640×480, 240 frames, 12–14 objects (three or four of each of two chair designs, six
+    /// unique objects).
     Default,
 }
 

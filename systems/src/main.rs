@@ -16,12 +16,20 @@ mod run_phases;
 mod run_plan;
 
 /// Object-level RGB-D mapping with category-level neural fields.
+///
+/// `catmap [OPTIONS]` without a subcommand is `catmap run [OPTIONS]`.
 #[derive(Parser, Debug)]
-#[command(name = "catmap", version, about)]
+#[command(name = "catmap", version = VERSION, about, long_about = None, args_conflicts_with_subcommands = true)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// The options of `catmap run`, for `catmap` without a subcommand.
+    #[command(flatten)]
+    run: cli_run::RunArgs,
 }
+
+/// The version, with the commit it was built from when built from a git checkout (`build.rs`).
+pub(crate) const VERSION: &str = env!("CATMAP_VERSION");
 
 #[derive(Subcommand, Debug)]
 enum Command {
@@ -37,13 +45,6 @@ enum Command {
     Config,
 }
 
-/// `catmap` with no subcommand runs `catmap run` with its defaults.
-#[derive(Parser, Debug)]
-struct RunDefaults {
-    #[command(flatten)]
-    args: cli_run::RunArgs,
-}
-
 fn main() -> anyhow::Result<()> {
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
@@ -53,10 +54,7 @@ fn main() -> anyhow::Result<()> {
         .with_target(false)
         .init();
     let cli = Cli::parse();
-    match cli
-        .command
-        .unwrap_or_else(|| Command::Run(RunDefaults::parse_from(["catmap"]).args))
-    {
+    match cli.command.unwrap_or(Command::Run(cli.run)) {
         Command::Run(args) => cli_run::run(&args),
         Command::Synth(args) => cli_synth::synth(&args),
         Command::Eval(args) => cli_eval::eval(&args),

@@ -12,7 +12,7 @@ use catmap::metrics::{EvalSettings, EvaluationReport, GroundTruth, ObjectClasses
 use catmap_systems::Mapper;
 use catmap_systems::summary::{RunSummary, StepOutcome};
 
-use crate::run_plan::RunPlan;
+use crate::run_plan::{Recording, RunPlan};
 
 /// Writes every output of a finished mapper; errors only when the map's own outputs cannot be
 /// written.
@@ -45,6 +45,10 @@ pub fn write_outputs(mut mapper: Mapper, plan: &RunPlan, dataset_name: String, s
         " (online)"
     };
     summary.mode = format!("{:?}{protocol}", plan.mode).to_lowercase();
+    summary.version = crate::VERSION.to_owned();
+    summary.command_line = std::env::args().collect();
+    summary.seed = config.seed;
+    summary.config = Some(config.clone());
     summary.training_steps = training_steps;
     summary.training = Some(training);
     summary
@@ -76,14 +80,84 @@ pub fn write_outputs(mut mapper: Mapper, plan: &RunPlan, dataset_name: String, s
         );
     }
     crate::print_stdout(&summary.table());
+    crate::print_stdout(&where_to_look(plan));
     tracing::info!(summary = %summary_path.display(), "done");
     Ok(())
+}
+
+/// What the run left in its output folder, with sizes, and how to look at it.
+fn where_to_look(plan: &RunPlan) -> String {
+    use std::fmt::Write as _;
+    let mib = |bytes: u64| bytes as f64 / (1024.0 * 1024.0);
+    let out = &plan.out;
+    let mut text = format!("\noutputs in {}:\n", out.display());
+    let meshes: Vec<(String, u64)> = std::fs::read_dir(out.join("meshes"))
+        .map(|dir| {
+            dir.flatten()
+                .filter_map(|e| {
+                    let name = e.file_name().to_string_lossy().into_owned();
+                    let size = e.metadata().ok()?.len();
+                    name.ends_with(".ply").then_some((name, size))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    if !meshes.is_empty() {
+        let objects = meshes.iter().filter(|(name, _)| name.starts_with("obj_")).count();
+        let total: u64 = meshes.iter().map(|(_, size)| size).sum();
+        let _ = writeln!(
+            text,
+            "  meshes/          {objects} object meshes obj_{{id}}.ply{} ({:.0} MiB): open them in a mesh viewer \
+             (MeshLab, Blender)",
+            if meshes.len() > objects { " and the scene" } else { "" },
+            mib(total),
+        );
+    }
+    match &plan.recording {
+        Recording::Save(path) => {
+            let size = std::fs::metadata(path).map_or(0, |m| m.len());
+            let _ = writeln!(
+                text,
+                "  recording        {} ({:.0} MiB): `rerun {}` replays the frames, masks, clouds, boxes, \
+                 losses and meshes (--no-recording skips it)",
+                path.display(),
+                mib(size),
+                path.display()
+            );
+        }
+        Recording::Connect(url) => {
+            let _ = writeln!(text, "  recording        streamed to {url}");
+        }
+        Recording::Off => {}
+    }
+    for (file, what) in [
+        (
+            "summary.json",
+            "the run: seed, stages, training steps, objects and classes",
+        ),
+        (
+            "metrics.json",
+            "accuracy, completion and C.R. per object, per class and mean",
+        ),
+        (
+            "categories.json",
+            "each class's subcategories, representatives and registrations",
+        ),
+    ] {
+        if out.join(file).is_file() {
+            let _ = writeln!(text, "  {file:<16} {what}");
+        }
+    }
+    text
 }
 
 /// Renames the finished recording file into place (a warning when that fails).
 fn complete_recording(plan: &RunPlan) -> StepOutcome {
     match plan.complete_recording() {
-        Ok(output) => StepOutcome::Done { output },
+        Ok(Some(output)) => StepOutcome::Done { output },
+        Ok(None) => StepOutcome::Skipped {
+            reason: "--no-recording".to_owned(),
+        },
         Err(e) => {
             tracing::warn!("the recording is incomplete (the map is complete): {e:#}");
             StepOutcome::Failed {

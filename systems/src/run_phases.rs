@@ -40,7 +40,9 @@ pub fn drive(mut mapper: Mapper, plan: RunPlan, source: Arc<dyn FrameSource>, st
     let positions = stream_positions(source.len(), config.stream.stride, config.stream.max_frames);
     anyhow::ensure!(!positions.is_empty(), "{} has no frames to map", source.name());
     let mut checkpoints = Checkpoints::new(&plan, config.checkpoint.clone(), started);
-    mapper.set_recording(plan.open_recording(positions.len(), &config.rerun)?);
+    if let Some(recording) = plan.open_recording(positions.len(), &config.rerun)? {
+        mapper.set_recording(recording);
+    }
 
     let consumed = mapper.positions_consumed().min(positions.len());
     let stream = (!mapper.stream_ended()).then(|| {

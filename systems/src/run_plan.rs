@@ -22,6 +22,8 @@ pub enum Recording {
     Save(PathBuf),
     /// Streamed to a viewer at this address.
     Connect(String),
+    /// None (`--no-recording`).
+    Off,
 }
 
 /// The run's inputs and outputs besides the mapper configuration.
@@ -82,11 +84,17 @@ impl RunPlan {
     /// [`RunPlan::complete_recording`]). A file for a stream of more than
     /// `rerun.rrd_footer_max_frames` frames is saved without Rerun's in-memory chunk index
     /// ([`crate::rrd_file`]).
-    pub fn open_recording(&self, frames: usize, config: &RerunConfig) -> anyhow::Result<rerun::RecordingStream> {
+    pub fn open_recording(
+        &self,
+        frames: usize,
+        config: &RerunConfig,
+    ) -> anyhow::Result<Option<rerun::RecordingStream>> {
         let builder = rerun::RecordingStreamBuilder::new("catmap");
         match &self.recording {
+            Recording::Off => Ok(None),
             Recording::Connect(url) => builder
                 .connect_grpc_opts(url.clone())
+                .map(Some)
                 .with_context(|| format!("cannot connect to Rerun at {url}")),
             Recording::Save(path) => {
                 if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
@@ -101,22 +109,24 @@ impl RunPlan {
                     );
                 }
                 save_rrd(builder, &temp, footer)
+                    .map(Some)
                     .with_context(|| format!("cannot write the Rerun recording {}", temp.display()))
             }
         }
     }
 
     /// Renames the finished recording file into place (after the recording was flushed);
-    /// returns where the recording went.
-    pub fn complete_recording(&self) -> anyhow::Result<String> {
+    /// returns where the recording went (`None`: there is none).
+    pub fn complete_recording(&self) -> anyhow::Result<Option<String>> {
         match &self.recording {
             Recording::Save(path) => {
                 let temp = catmap::atomic_file::temp_path_for(path);
                 std::fs::rename(&temp, path)
                     .with_context(|| format!("cannot move {} to {}", temp.display(), path.display()))?;
-                Ok(path.display().to_string())
+                Ok(Some(path.display().to_string()))
             }
-            Recording::Connect(url) => Ok(url.clone()),
+            Recording::Connect(url) => Ok(Some(url.clone())),
+            Recording::Off => Ok(None),
         }
     }
 }

@@ -28,11 +28,22 @@ pub struct ObjectRow {
     pub cloud_points: usize,
     /// Oriented box edge lengths, metres (sorted as the box axes: x, y, z).
     pub box_extents_m: Option<[f32; 3]>,
+    /// The oriented box: its pose `world_from_box` (`rotation` as a quaternion `[x, y, z, w]`,
+    /// `translation` in metres: the box centre) and `half_extents` in metres. `None` while the
+    /// cloud was too small to fit one.
+    #[serde(default)]
+    pub bounds: Option<catmap::oriented_box::OrientedBox>,
 }
 
 /// What a run did and how long each stage took.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunSummary {
+    /// catmap's version (and the commit it was built from, when known).
+    pub version: String,
+    /// The command line of the process that finished the run.
+    pub command_line: Vec<String>,
+    /// Seed of every random choice.
+    pub seed: u64,
     /// Where the frames came from.
     pub dataset: String,
     /// Field model and protocol, e.g. "instance (offline)".
@@ -61,6 +72,9 @@ pub struct RunSummary {
     /// What became of each step after the map was made (`recording`: the recording's
     /// completion, `eval`: the evaluation). A failure here never fails the run.
     pub finishing_steps: BTreeMap<String, StepOutcome>,
+    /// The whole configuration the run used (defaults, config file and command line resolved),
+    /// the same tree as `catmap config` prints.
+    pub config: Option<catmap::MapperConfig>,
 }
 
 /// How the fields trained.
@@ -193,6 +207,7 @@ impl RunSummary {
                 visible_frames: o.visible_frames,
                 cloud_points: o.cloud_points,
                 box_extents_m: o.bounds.map(|b| b.extents().into()),
+                bounds: o.bounds,
             })
             .collect();
         let mut objects_per_class = BTreeMap::new();
@@ -200,6 +215,9 @@ impl RunSummary {
             *objects_per_class.entry(row.class_name.clone()).or_insert(0) += 1;
         }
         Self {
+            version: String::new(),
+            command_line: Vec::new(),
+            seed: 0,
             dataset,
             mode: String::new(),
             training_steps: 0,
@@ -213,6 +231,7 @@ impl RunSummary {
             peak_resident_mib: catmap::process_memory::peak_resident_mib(),
             training: None,
             finishing_steps: BTreeMap::new(),
+            config: None,
         }
     }
 
@@ -309,6 +328,7 @@ mod tests {
             visible_frames: 1,
             cloud_points: 10,
             box_extents_m: None,
+            bounds: None,
         }
     }
 
