@@ -161,7 +161,7 @@ impl ReplicaSequence {
         }
         let depth_dir = dir.join("depth");
         if !depth_dir.is_dir() {
-            return Err(CatmapError::layout(&dir, not_replica_layout(&dir)));
+            return Err(CatmapError::layout(&dir, not_replica_layout(&dir, "no depth/ folder")));
         }
         let indices: Vec<u64> = numbered_files(&depth_dir, "depth_", ".png")?
             .into_iter()
@@ -170,7 +170,7 @@ impl ReplicaSequence {
         if indices.is_empty() {
             return Err(CatmapError::layout(
                 depth_dir,
-                "no depth_<i>.png files: the sequence has no frames",
+                not_replica_layout(&dir, "no depth_<i>.png files, so no frames"),
             ));
         }
         let intrinsics = resolve_replica_intrinsics(&dir, options.camera)?;
@@ -287,8 +287,8 @@ impl FrameSource for ReplicaSequence {
     }
 }
 
-/// What a folder without `depth/` lacks, what the Replica layout is, and what to try.
-fn not_replica_layout(dir: &Path) -> String {
+/// What a folder lacks (`missing`), what the Replica layout is, and what to try.
+fn not_replica_layout(dir: &Path, missing: &str) -> String {
     let looks_like_scannet = ["color", "pose", "instance-filt"].iter().all(|f| dir.join(f).is_dir());
     let hint = if looks_like_scannet {
         "this looks like a ScanNet export: try `--format scannet`"
@@ -297,7 +297,7 @@ fn not_replica_layout(dir: &Path) -> String {
          `--format scannet`; `catmap synth --out DIR` writes an example of this layout"
     };
     format!(
-        "not a sequence in Replica's (vMAP's) layout: no depth/ folder. Expected depth/depth_<i>.png, \
+        "not a sequence in Replica's (vMAP's) layout: {missing}. Expected depth/depth_<i>.png, \
          rgb/rgb_<i>.png, semantic_class/semantic_class_<i>.png, \
          semantic_instance/semantic_instance_<i>.png and traj_w_c.txt (intrinsics.json optional); {hint}"
     )
