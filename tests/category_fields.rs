@@ -33,9 +33,9 @@ fn completion_per_object(
         ..MapperConfig::default()
     };
     config.meshes.object.voxel_size_m = 0.01;
+    config.category_fields.enabled = category_steps > 0; // instance mode without category steps
     if category_steps > 0 {
         config.categories.enabled = true;
-        config.category_fields.enabled = true;
         config.category_fields.iterations = category_steps;
     }
     let mut mapper = common::mapping::map_scene(scene, 0..scene.len(), config);

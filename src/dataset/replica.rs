@@ -152,7 +152,7 @@ impl ReplicaSequence {
         if !dir.is_dir() {
             return Err(CatmapError::layout(
                 dir,
-                "no such folder (the dataset: a sequence in Replica's layout, see `catmap run --help`)",
+                "the dataset folder does not exist (a sequence in Replica's layout: see `catmap run --help`)",
             ));
         }
         check_depth_options(options.depth_scale, options.max_depth_m)?;

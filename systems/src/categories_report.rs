@@ -18,7 +18,9 @@ pub struct MemberRecord {
     pub id: ObjectId,
     /// Normalised one-way Chamfer distance to the representative (0 for the representative).
     pub chamfer: f32,
-    /// The reverse distance, when the subcategory rule needed it.
+    /// The reverse distance, only when the subcategory rule needed it (a Chamfer distance
+    /// between `categories.subcategories.same_below` and `new_above`); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub reverse_chamfer: Option<f32>,
     /// Sim(3) from NOCS (the unit cube) to the object's box in world coordinates, row-major 4×4.
     pub world_from_nocs: [[f32; 4]; 4],

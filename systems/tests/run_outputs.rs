@@ -452,7 +452,7 @@ fn a_missing_dataset_is_refused_naming_it_and_catmap_alone_takes_runs_options() 
     let work = tempfile::tempdir().expect("temp dir");
     let missing = work.path().join("no-such-dataset");
     let stderr = refused_run(&missing, &work.path().join("out"), &[]);
-    assert_says(&stderr, &["no-such-dataset", "no such folder"]);
+    assert_says(&stderr, &["no-such-dataset", "does not exist"]);
     // `catmap [run options]` is `catmap run [run options]`.
     let out = work.path().join("out2");
     let output = catmap()
@@ -464,7 +464,7 @@ fn a_missing_dataset_is_refused_naming_it_and_catmap_alone_takes_runs_options() 
         .expect("catmap runs");
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success() && !out.exists());
-    assert_says(&stderr, &["no-such-dataset", "no such folder"]);
+    assert_says(&stderr, &["no-such-dataset", "does not exist"]);
     let version = catmap().arg("--version").output().expect("catmap runs");
     let version = String::from_utf8_lossy(&version.stdout);
     assert!(
