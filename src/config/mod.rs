@@ -300,6 +300,41 @@ fn line_of(text: &str, offset: usize) -> usize {
 mod tests {
     use super::*;
 
+    /// Every key `catmap config` prints, as a dotted path.
+    fn printed_keys(table: &toml::Table, prefix: &str, keys: &mut Vec<String>) {
+        for (key, value) in table {
+            let path = if prefix.is_empty() {
+                key.clone()
+            } else {
+                format!("{prefix}.{key}")
+            };
+            match value {
+                toml::Value::Table(inner) => printed_keys(inner, &path, keys),
+                _ => keys.push(path),
+            }
+        }
+    }
+
+    #[test]
+    fn every_key_catmap_config_prints_is_explained_in_the_readmes_configuration_table() {
+        let readme = include_str!("../../README.md");
+        let start = readme.find("\n## Configuration").expect("a Configuration section");
+        let section = &readme[start..];
+        let section = &section[..section[1..].find("\n## ").map_or(section.len(), |end| end + 1)];
+        let table: toml::Table = toml::from_str(&MapperConfig::default().to_toml()).expect("printed TOML parses");
+        let mut keys = Vec::new();
+        printed_keys(&table, "", &mut keys);
+        assert!(keys.len() > 100, "the whole tree: {}", keys.len());
+        let unexplained: Vec<&String> = keys
+            .iter()
+            .filter(|key| !section.contains(&format!("| `{key}`")) && !section.contains(&format!(", `{key}`")))
+            .collect();
+        assert!(
+            unexplained.is_empty(),
+            "keys without a row in the README: {unexplained:?}"
+        );
+    }
+
     #[test]
     fn a_config_file_may_list_only_overrides() {
         let config = MapperConfig::from_toml("seed = 7\n[keyframes]\nobject_stride = 5\n").expect("valid");
