@@ -80,3 +80,113 @@ fn load_config(path: Option<&PathBuf>) -> anyhow::Result<catmap::MapperConfig> {
         Some(path) => catmap::MapperConfig::load(path).context("cannot load the config"),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::{CommandFactory, Parser};
+
+    use super::Cli;
+
+    /// The README's `catmap …` command lines: inline code spans, and lines of code blocks
+    /// (`cargo run --release -- ARGS` counts as `catmap ARGS`), split at `&&` and `;`.
+    fn readme_command_lines() -> Vec<String> {
+        let readme = include_str!("../../README.md");
+        let (mut prose, mut commands) = (String::new(), Vec::new());
+        let mut in_block = false;
+        for line in readme.lines() {
+            if line.trim_start().starts_with("```") {
+                in_block = !in_block;
+            } else if in_block {
+                let line = line.split(" #").next().unwrap_or("").trim();
+                if let Some(args) = line.strip_prefix("cargo run --release -- ") {
+                    commands.push(format!("catmap {args}"));
+                } else if line.starts_with("catmap ") {
+                    commands.push(line.to_owned());
+                }
+            } else {
+                prose.push_str(line);
+                prose.push(' ');
+            }
+        }
+        for (i, span) in prose.split('`').enumerate() {
+            if i % 2 == 1 && (span == "catmap" || span.starts_with("catmap ")) {
+                commands.push(span.to_owned());
+            }
+        }
+        commands
+            .iter()
+            .flat_map(|c| c.split("&&").flat_map(|c| c.split(';')))
+            .map(|c| c.split('>').next().unwrap_or("").trim().to_owned())
+            .filter(|c| c.starts_with("catmap"))
+            .collect()
+    }
+
+    /// Every long option of the command line, with the subcommand it belongs to ("" at the top).
+    fn long_options() -> Vec<(String, String)> {
+        let cli = Cli::command();
+        let mut options: Vec<(String, String)> = cli
+            .get_arguments()
+            .filter_map(|a| a.get_long().map(|l| (String::new(), format!("--{l}"))))
+            .collect();
+        for sub in cli.get_subcommands() {
+            options.extend(
+                sub.get_arguments()
+                    .filter_map(|a| a.get_long().map(|l| (sub.get_name().to_owned(), format!("--{l}")))),
+            );
+        }
+        options.extend([("".into(), "--help".into()), ("".into(), "--version".into())]);
+        options
+    }
+
+    #[test]
+    fn every_catmap_command_line_in_the_readme_parses_and_every_option_it_names_exists() {
+        let commands = readme_command_lines();
+        assert!(commands.len() > 20, "the README's command lines: {commands:?}");
+        let options = long_options();
+        let mut parsed = 0;
+        for command in &commands {
+            let words: Vec<&str> = command.split_whitespace().collect();
+            let sub = words.get(1).filter(|w| !w.starts_with('-')).copied().unwrap_or("run");
+            for word in words.iter().filter(|w| w.contains("--")) {
+                for flag in word.split(['[', ']', '|', '(', ')']).filter(|f| f.starts_with("--")) {
+                    let flag = flag.split('=').next().unwrap_or(flag);
+                    assert!(
+                        options.iter().any(|(s, o)| o == flag && (s == sub || s.is_empty())),
+                        "`{command}` names {flag}, which `catmap {sub}` does not have"
+                    );
+                }
+            }
+            // A synopsis (with [optional] parts or alternatives) is checked by its options alone;
+            // `catmap SUB` alone names a subcommand.
+            if ["[", "|", "…", "..."].iter().any(|mark| command.contains(mark)) {
+                continue;
+            }
+            if words.len() == 2 && !words[1].starts_with('-') {
+                assert!(
+                    Cli::command().get_subcommands().any(|s| s.get_name() == words[1]),
+                    "`{command}`: no such subcommand"
+                );
+                continue;
+            }
+            // Placeholders for numbers (`--seed S`, `--stride K`) stand for 1.
+            let words: Vec<&str> = words
+                .iter()
+                .map(|w| {
+                    if w.len() <= 2 && w.chars().all(|c| c.is_ascii_uppercase()) {
+                        "1"
+                    } else {
+                        w
+                    }
+                })
+                .collect();
+            if let Err(e) = Cli::try_parse_from(&words) {
+                assert!(
+                    matches!(e.kind(), clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion),
+                    "`{command}` does not parse: {e}"
+                );
+            }
+            parsed += 1;
+        }
+        assert!(parsed > 15, "most are whole command lines: {parsed} of {}", commands.len());
+    }
+}
