@@ -102,7 +102,11 @@ fn exact_copies_score_only_sampling_noise_and_full_completion() {
             o.id,
             o.class_name
         );
-        assert_eq!(s.completion_ratio_pct, 100.0, "object {} is complete within 5 cm", o.id);
+        assert_eq!(
+            s.completion_ratio_5cm_pct, 100.0,
+            "object {} is complete within 5 cm",
+            o.id
+        );
         assert_ne!(o.class_name, "unknown", "scene.json names object {}'s class", o.id);
     }
 }
@@ -130,7 +134,7 @@ fn a_shifted_copy_scores_up_to_its_shift() {
         "the top of the shifted copy leaves the box: {shifted:?}"
     );
     assert_eq!(
-        shifted.completion_ratio_pct, 100.0,
+        shifted.completion_ratio_5cm_pct, 100.0,
         "every point moved by at most 3 cm < 5 cm"
     );
     let exact = object(&report, f.exact).scores;
@@ -151,7 +155,11 @@ fn a_deleted_prediction_is_reported_missing_and_counted() {
         FOLDERS.deleted
     );
     assert_eq!(
-        (deleted.accuracy_cm, deleted.completion_cm, deleted.completion_ratio_pct),
+        (
+            deleted.accuracy_cm,
+            deleted.completion_cm,
+            deleted.completion_ratio_5cm_pct
+        ),
         (None, None, 0.0)
     );
     assert_eq!(report.mean.missing, 1, "one object is missing");

@@ -63,7 +63,7 @@ pub fn render_comparison(groups: &ComparedGroups, label_a: &str, label_b: &str) 
             a.objects,
             distance(a.accuracy_cm, b.accuracy_cm),
             distance(a.completion_cm, b.completion_cm),
-            ratio(a.completion_ratio_pct, b.completion_ratio_pct),
+            ratio(a.completion_ratio_5cm_pct, b.completion_ratio_5cm_pct),
             ratio(a.completion_ratio_1cm_pct, b.completion_ratio_1cm_pct),
         );
     }
@@ -92,7 +92,7 @@ mod tests {
                     status: PredictionStatus::Reconstructed,
                     accuracy_cm: Some(2.0),
                     completion_cm: Some(completion),
-                    completion_ratio_pct: 90.0,
+                    completion_ratio_5cm_pct: 90.0,
                     completion_ratio_1cm_pct: 30.0,
                     accuracy_samples: 100,
                 },

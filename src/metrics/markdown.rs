@@ -30,7 +30,7 @@ pub fn render_markdown(report: &EvaluationReport) -> String {
             PredictionStatus::Reconstructed => scores(
                 v.accuracy_cm,
                 v.completion_cm,
-                v.completion_ratio_pct,
+                v.completion_ratio_5cm_pct,
                 v.completion_ratio_1cm_pct,
             ),
         };
@@ -58,7 +58,7 @@ fn summary_cells(s: &MetricSummary) -> String {
     let v = scores(
         s.accuracy_cm,
         s.completion_cm,
-        s.completion_ratio_pct,
+        s.completion_ratio_5cm_pct,
         s.completion_ratio_1cm_pct,
     );
     format!("{} | {} | {v}", s.objects, s.missing)
@@ -88,7 +88,7 @@ mod tests {
             status: PredictionStatus::Reconstructed,
             accuracy_cm: Some(1.234),
             completion_cm: Some(2.5),
-            completion_ratio_pct: 96.0,
+            completion_ratio_5cm_pct: 96.0,
             completion_ratio_1cm_pct: 40.0,
             accuracy_samples: 10,
         };

@@ -48,8 +48,10 @@ pub struct ObjectScores {
     /// Mean ground-truth → predicted distance, cm; `None` (infinite) when missing or when no
     /// predicted sample survives the crop.
     pub completion_cm: Option<f32>,
-    /// Share of ground-truth samples within 5 cm of the prediction, % (0 when missing).
-    pub completion_ratio_pct: f32,
+    /// Share of ground-truth samples within 5 cm of the prediction, % (0 when missing). Read
+    /// also under its earlier name `completion_ratio_pct`.
+    #[serde(alias = "completion_ratio_pct")]
+    pub completion_ratio_5cm_pct: f32,
     /// Share of ground-truth samples within 1 cm of the prediction, % (0 when missing).
     pub completion_ratio_1cm_pct: f32,
     /// Predicted samples inside the crop (those accuracy is averaged over).
@@ -63,7 +65,7 @@ impl ObjectScores {
             status: PredictionStatus::Missing,
             accuracy_cm: None,
             completion_cm: None,
-            completion_ratio_pct: 0.0,
+            completion_ratio_5cm_pct: 0.0,
             completion_ratio_1cm_pct: 0.0,
             accuracy_samples: 0,
         }
@@ -102,7 +104,7 @@ pub fn score_object<R: Rng + ?Sized>(
         status: PredictionStatus::Reconstructed,
         accuracy_cm,
         completion_cm: None,
-        completion_ratio_pct: 0.0,
+        completion_ratio_5cm_pct: 0.0,
         completion_ratio_1cm_pct: 0.0,
         accuracy_samples: cropped.prediction_for_accuracy.len(),
     };
@@ -111,7 +113,7 @@ pub fn score_object<R: Rng + ?Sized>(
     }
     let distances = PointIndex::new(&cropped.prediction_for_completion)?.nearest_distances(&cropped.ground_truth);
     scores.completion_cm = Some(100.0 * mean(&distances));
-    scores.completion_ratio_pct = percent_within(&distances, COMPLETION_THRESHOLD_M);
+    scores.completion_ratio_5cm_pct = percent_within(&distances, COMPLETION_THRESHOLD_M);
     scores.completion_ratio_1cm_pct = percent_within(&distances, FINE_COMPLETION_THRESHOLD_M);
     Ok(scores)
 }

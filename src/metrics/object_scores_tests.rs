@@ -53,7 +53,7 @@ fn identical_meshes_score_about_zero_and_full_completion() {
     // Two independent 10 000-sample sets of a 0.5 m² surface lie ~3.5 mm apart on average.
     assert!(accuracy(&s) < 0.5 && completion(&s) < 0.5, "sampling noise only: {s:?}");
     assert_eq!(
-        s.completion_ratio_pct, 100.0,
+        s.completion_ratio_5cm_pct, 100.0,
         "every ground-truth sample is within 5 cm"
     );
     assert!(s.completion_ratio_1cm_pct > 99.0, "nearly all within 1 cm: {s:?}");
@@ -67,7 +67,7 @@ fn a_surface_offset_by_three_centimetres_scores_three_centimetres() {
     let s = score(&gt, Some(&sphere(Point3::origin(), 0.17)), Crop::Paper);
     assert!((accuracy(&s) - 3.0).abs() < 0.15, "accuracy ≈ 3 cm: {s:?}");
     assert!((completion(&s) - 3.0).abs() < 0.15, "completion ≈ 3 cm: {s:?}");
-    assert_eq!(s.completion_ratio_pct, 100.0, "3 cm < 5 cm");
+    assert_eq!(s.completion_ratio_5cm_pct, 100.0, "3 cm < 5 cm");
     assert_eq!(s.completion_ratio_1cm_pct, 0.0, "3 cm > 1 cm");
 }
 
@@ -96,7 +96,7 @@ fn half_a_mesh_grows_completion_but_keeps_accuracy() {
     assert!(completion(&s) > 4.5, "the lower half is far from the upper: {s:?}");
     // Covered: the upper half and the 5 cm band below the rim (a quarter of the lower half).
     assert!(
-        (s.completion_ratio_pct - 62.0).abs() < 5.0,
+        (s.completion_ratio_5cm_pct - 62.0).abs() < 5.0,
         "about 62 % of the ground truth is covered: {s:?}"
     );
 }
@@ -152,7 +152,7 @@ fn a_prediction_entirely_outside_the_crop_has_no_accuracy() {
     );
     let vmap = score(&gt, Some(&far), Crop::Vmap);
     assert_eq!(
-        (vmap.accuracy_cm, vmap.completion_cm, vmap.completion_ratio_pct),
+        (vmap.accuracy_cm, vmap.completion_cm, vmap.completion_ratio_5cm_pct),
         (None, None, 0.0)
     );
 }

@@ -60,8 +60,9 @@ pub struct MetricSummary {
     pub accuracy_cm: Option<f32>,
     /// Mean completion over the objects with one, cm.
     pub completion_cm: Option<f32>,
-    /// Mean 5 cm completion ratio over all objects, %.
-    pub completion_ratio_pct: f32,
+    /// Mean 5 cm completion ratio over all objects, % (read also as `completion_ratio_pct`).
+    #[serde(alias = "completion_ratio_pct")]
+    pub completion_ratio_5cm_pct: f32,
     /// Mean 1 cm completion ratio over all objects, %.
     pub completion_ratio_1cm_pct: f32,
 }
@@ -76,7 +77,7 @@ impl MetricSummary {
             missing: scores.iter().filter(|s| s.status == PredictionStatus::Missing).count(),
             accuracy_cm: mean(scores.iter().filter_map(|s| s.accuracy_cm)),
             completion_cm: mean(scores.iter().filter_map(|s| s.completion_cm)),
-            completion_ratio_pct: ratio_mean(|s| s.completion_ratio_pct),
+            completion_ratio_5cm_pct: ratio_mean(|s| s.completion_ratio_5cm_pct),
             completion_ratio_1cm_pct: ratio_mean(|s| s.completion_ratio_1cm_pct),
         }
     }
@@ -142,7 +143,7 @@ mod tests {
             status: PredictionStatus::Reconstructed,
             accuracy_cm: Some(accuracy),
             completion_cm: Some(completion),
-            completion_ratio_pct: ratio,
+            completion_ratio_5cm_pct: ratio,
             completion_ratio_1cm_pct: ratio / 2.0,
             accuracy_samples: 10,
         }
@@ -168,9 +169,9 @@ mod tests {
             (Some(1.0), Some(2.0)),
             "distances skip the missing chair"
         );
-        assert_eq!(chair.completion_ratio_pct, 45.0, "the missing chair counts 0 %");
+        assert_eq!(chair.completion_ratio_5cm_pct, 45.0, "the missing chair counts 0 %");
         assert_eq!(report.mean.completion_cm, Some(3.0));
-        assert!((report.mean.completion_ratio_pct - 160.0 / 3.0).abs() < 1e-4);
+        assert!((report.mean.completion_ratio_5cm_pct - 160.0 / 3.0).abs() < 1e-4);
     }
 
     #[test]

@@ -181,12 +181,19 @@ mod tests {
                 .collect();
             if let Err(e) = Cli::try_parse_from(&words) {
                 assert!(
-                    matches!(e.kind(), clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion),
+                    matches!(
+                        e.kind(),
+                        clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion
+                    ),
                     "`{command}` does not parse: {e}"
                 );
             }
             parsed += 1;
         }
-        assert!(parsed > 15, "most are whole command lines: {parsed} of {}", commands.len());
+        assert!(
+            parsed > 15,
+            "most are whole command lines: {parsed} of {}",
+            commands.len()
+        );
     }
 }

@@ -32,7 +32,7 @@ pub fn write_outputs(mut mapper: Mapper, plan: &RunPlan, dataset_name: String, s
     };
     let mut stage_seconds = mapper.stage_seconds();
     if let Some(stats) = mapper.stream_stats() {
-        stage_seconds.insert("read (reader thread)".to_owned(), stats.decode_time.as_secs_f64());
+        stage_seconds.insert("read".to_owned(), stats.decode_time.as_secs_f64());
     }
     let training_steps = mapper.training_steps();
     let training = mapper.training_report();
