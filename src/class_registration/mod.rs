@@ -330,7 +330,7 @@ mod tests {
     fn pairs_on_unchanged_clouds_are_answered_as_before_and_only_they() {
         let members = three_members();
         let search = starting(RegistrationStart::Search);
-        let first = register_class(&members, &first_time(), &search, 7).unwrap();
+        let first = register_class(&members, &first_time(), &search, 7).expect("registered");
         // Table → chair representative (rejected) and chair → chair (joined): both answered.
         assert_eq!(first.pairs.len(), 2, "{:?}", first.pairs.0.keys());
         // An impossible answer planted in the cache shows whether a pair was searched again.
@@ -338,7 +338,7 @@ mod tests {
         for cached in planted.pairs.0.values_mut() {
             cached.chamfer = 1e-6;
         }
-        let again = register_class(&members, &planted, &search, 7).unwrap();
+        let again = register_class(&members, &planted, &search, 7).expect("registered");
         assert_eq!(
             again.pairs, planted.pairs,
             "no cloud changed: every pair from the cache"
@@ -350,7 +350,7 @@ mod tests {
 
         let mut table_moved = members.clone();
         table_moved[2].cloud_version += 1;
-        let after = register_class(&table_moved, &planted, &search, 7).unwrap();
+        let after = register_class(&table_moved, &planted, &search, 7).expect("registered");
         assert_eq!(groups(&after), groups(&first), "the table's pair searched again");
         let chair_pair = (ObjectId(2), ObjectId(1));
         assert_eq!(
