@@ -26,7 +26,9 @@ pub struct MemberRecord {
     pub world_from_nocs: [[f32; 4]; 4],
     /// Box edge lengths, metres.
     pub extents: [f32; 3],
-    /// Reliable rays of its uncertainty sphere (what ranks the representative), when computed.
+    /// Reliable rays of its uncertainty sphere (what ranks the representative); absent for a
+    /// class of one member (nothing to rank, so no sphere is evaluated).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub reliable_rays: Option<usize>,
 }
 
