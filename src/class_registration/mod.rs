@@ -22,7 +22,7 @@ use crate::ids::ObjectId;
 use crate::nocs::{NocsFrame, aligned_member_frame, representative_frame};
 use crate::oriented_box::OrientedBox;
 use crate::registration::voxel_centroids;
-use pairs::{ClassClouds, Previous};
+use pairs::ClassClouds;
 
 /// One member as registration sees it.
 #[derive(Debug, Clone, PartialEq)]
@@ -46,10 +46,6 @@ pub struct RegisteredMember {
     pub alignment: Alignment,
     /// Its box and normalised frame.
     pub nocs: NocsFrame,
-    /// The cloud sizes (its own, its representative's) its alignment was found at (`None` for
-    /// the representative).
-    #[serde(default)]
-    pub found_at: Option<PairPoints>,
 }
 
 /// A registered subcategory.
@@ -90,15 +86,7 @@ pub fn register_class(
         .collect::<Result<_>>()?;
     let sizes: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.cloud.len())).collect();
     let versions: BTreeMap<ObjectId, u64> = members.iter().map(|m| (m.id, m.cloud_version)).collect();
-    let pairs = ClassClouds::new(
-        &clouds,
-        &sizes,
-        &versions,
-        &previous.pairs,
-        cfg,
-        previous_alignments(&previous.groups),
-        seed,
-    );
+    let pairs = ClassClouds::new(&clouds, &sizes, &versions, &previous.pairs, cfg, seed);
     let reliable: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.reliable_rays)).collect();
     let ids: Vec<ObjectId> = members.iter().map(|m| m.id).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -125,17 +113,7 @@ pub fn register_class(
                         let cloud = &by_id[&id].cloud;
                         aligned_member_frame(cloud, &alignment.template_from_object, &rep_frame, cfg.min_extent_m)?
                     };
-                    let found_at = (id != group.representative)
-                        .then(|| pairs.found_at(id, group.representative))
-                        .flatten();
-                    Ok((
-                        id,
-                        RegisteredMember {
-                            alignment,
-                            nocs,
-                            found_at,
-                        },
-                    ))
+                    Ok((id, RegisteredMember { alignment, nocs }))
                 })
                 .collect::<Result<_>>()?;
             Ok(RegisteredSubcategory {
@@ -148,20 +126,6 @@ pub fn register_class(
         groups,
         pairs: pairs.into_answered(),
     })
-}
-
-/// The stored alignment of every (member, representative) pair of a registration, with the
-/// cloud sizes it was found at.
-fn previous_alignments(groups: &[RegisteredSubcategory]) -> Previous {
-    groups
-        .iter()
-        .flat_map(|g| {
-            g.members
-                .iter()
-                .filter(|(id, _)| **id != g.representative)
-                .map(|(id, m)| ((*id, g.representative), (m.alignment, m.found_at)))
-        })
-        .collect()
 }
 
 /// Whether a class must be registered (again): it never was (`registered_points` is `None`), a
@@ -313,10 +277,9 @@ mod tests {
         let first = register_class(&members, &first_time(), &starting(RegistrationStart::Search), 7).unwrap();
         // A stored alignment half a turn off, with the good score: the warm start cannot reach it.
         let mut wrong = first.clone();
-        let member = wrong.groups[0].members.get_mut(&ObjectId(2)).unwrap();
-        member.alignment.template_from_object =
-            Isometry3::rotation(nalgebra::Vector3::new(0.0, 0.0, std::f32::consts::PI))
-                * member.alignment.template_from_object;
+        let pair = wrong.pairs.0.get_mut(&(ObjectId(2), ObjectId(1))).unwrap();
+        pair.template_from_source =
+            Isometry3::rotation(nalgebra::Vector3::new(0.0, 0.0, std::f32::consts::PI)) * pair.template_from_source;
         let again = register_class(&touched(&members), &wrong, &starting(RegistrationStart::Warm), 7).unwrap();
         assert_eq!(groups(&again), groups(&first));
         assert_eq!(
@@ -409,30 +372,22 @@ mod tests {
         let members = three_members();
         let first = register_class(&members, &first_time(), &starting(RegistrationStart::Search), 7).unwrap();
         let chair = |registered: &ClassRegistration| registered.groups[0].members[&ObjectId(2)];
-        let found = chair(&first).found_at.expect("a searched pair records its cloud sizes");
+        let found_at = |registered: &ClassRegistration| registered.pairs.0[&(ObjectId(2), ObjectId(1))].found_at;
         assert_eq!(
-            found,
+            found_at(&first),
             PairPoints {
                 source: members[1].cloud.len(),
                 template: members[0].cloud.len()
-            }
-        );
-        assert_eq!(
-            first.groups[0].members[&ObjectId(1)].found_at,
-            None,
-            "the representative"
+            },
+            "a searched pair records its cloud sizes"
         );
         let reuse = starting(RegistrationStart::Reuse);
         let again = register_class(&touched(&members), &first, &reuse, 7).unwrap();
         assert_eq!(groups(&again), groups(&first));
         let (kept, searched) = (chair(&again), chair(&first));
         assert_eq!(
-            (kept.alignment.template_from_object, kept.nocs, kept.found_at),
-            (
-                searched.alignment.template_from_object,
-                searched.nocs,
-                searched.found_at
-            ),
+            (kept.alignment.template_from_object, kept.nocs, found_at(&again)),
+            (searched.alignment.template_from_object, searched.nocs, found_at(&first)),
             "same clouds: the alignment is kept as it was"
         );
         assert!(
@@ -453,8 +408,8 @@ mod tests {
         let after = register_class(&grown, &again, &reuse, 7).unwrap();
         assert_eq!(groups(&after), groups(&first));
         assert_eq!(
-            chair(&after).found_at.map(|p| p.source),
-            Some(grown[1].cloud.len()),
+            found_at(&after).source,
+            grown[1].cloud.len(),
             "searched at the grown size"
         );
         let searched = register_class(&grown, &first_time(), &starting(RegistrationStart::Search), 7).unwrap();

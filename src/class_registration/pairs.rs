@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use super::config::RegistrationStart;
 use super::pair_cache::{CachedPair, PairCache, PairVersions};
 use super::warm_start_holds;
-use crate::category::{Alignment, PairRegistration};
+use crate::category::PairRegistration;
 use crate::error::{CatmapError, Result};
 use crate::ids::ObjectId;
 use crate::registration::{
@@ -37,9 +37,6 @@ impl PairPoints {
     }
 }
 
-/// A pair's alignment in the class's previous registration, and the cloud sizes it was found at.
-pub(super) type Previous = BTreeMap<(ObjectId, ObjectId), (Alignment, Option<PairPoints>)>;
-
 /// Pairwise registration over a class's thinned clouds.
 pub(super) struct ClassClouds<'a> {
     /// Thinned clouds, by member.
@@ -48,13 +45,13 @@ pub(super) struct ClassClouds<'a> {
     pub sizes: &'a BTreeMap<ObjectId, usize>,
     /// Versions of the members' observed clouds now.
     pub versions: &'a BTreeMap<ObjectId, u64>,
-    /// The pairs the class's previous registration answered.
+    /// The pairs the class's previous registration answered: kept as they were when both clouds
+    /// are unchanged, otherwise where a `warm` or `reuse` start begins.
     pub cache: &'a PairCache,
     pub cfg: &'a RegistrationConfig,
     pub seed: u64,
     /// Where a pair registered before starts.
     pub start: RegistrationStart,
-    pub previous: Previous,
     pub warm_tolerance: f32,
     /// `Reuse`: how much both clouds may have grown for an alignment to be kept.
     pub growth: f32,
@@ -71,7 +68,6 @@ impl<'a> ClassClouds<'a> {
         versions: &'a BTreeMap<ObjectId, u64>,
         cache: &'a PairCache,
         cfg: &'a super::CategoryConfig,
-        previous: Previous,
         seed: u64,
     ) -> Self {
         Self {
@@ -82,7 +78,6 @@ impl<'a> ClassClouds<'a> {
             cfg: &cfg.registration,
             seed,
             start: cfg.registration_start,
-            previous,
             warm_tolerance: cfg.warm_start_tolerance,
             growth: cfg.reregister_growth,
             answered: Mutex::new(PairCache::default()),
@@ -94,12 +89,6 @@ impl<'a> ClassClouds<'a> {
             .get(&id)
             .map(Vec::as_slice)
             .ok_or_else(|| CatmapError::Degenerate(format!("no cloud for object {id}")))
-    }
-
-    /// The cloud sizes the alignment of `source` to `template` was found at, once answered.
-    pub fn found_at(&self, source: ObjectId, template: ObjectId) -> Option<PairPoints> {
-        let answered = self.answered.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        answered.0.get(&(source, template)).map(|c| c.found_at)
     }
 
     /// Every pair answered, for the next registration of the class.
@@ -172,20 +161,20 @@ impl PairRegistration for ClassClouds<'_> {
             let answer = (cached.template_from_source, cached.chamfer);
             return Ok(self.record(source, template, answer, cached.found_at));
         }
-        let previous = self.previous.get(&(source, template));
+        let previous = self.cache.0.get(&(source, template));
         if self.start == RegistrationStart::Reuse
-            && let Some((stored, Some(then))) = previous
-            && then.still_hold(now, self.growth)
+            && let Some(stored) = previous
+            && stored.found_at.still_hold(now, self.growth)
         {
             // The same pair on nearly the same clouds: the search would find the same alignment.
-            let pose = stored.template_from_object;
+            let pose = stored.template_from_source;
             let aligned: Vec<Point3<f32>> = s.iter().map(|p| pose * p).collect();
             let score = normalised_one_way_chamfer(&aligned, t)?;
-            return Ok(self.record(source, template, (pose, score), *then));
+            return Ok(self.record(source, template, (pose, score), stored.found_at));
         }
         let warm = match previous {
-            Some((stored, _)) if self.start == RegistrationStart::Warm => {
-                let warm = refine_registration(s, t, &stored.template_from_object, self.cfg)?;
+            Some(stored) if self.start == RegistrationStart::Warm => {
+                let warm = refine_registration(s, t, &stored.template_from_source, self.cfg)?;
                 if warm_start_holds(warm.score, stored.chamfer, self.warm_tolerance) {
                     let answer = (warm.template_from_source(), warm.score);
                     return Ok(self.record(source, template, answer, now));
