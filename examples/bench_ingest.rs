@@ -17,8 +17,8 @@ use std::time::Instant;
 
 use catmap::dataset::FrameSource;
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
+use catmap::dataset::stream::{FrameStream, stream_positions};
 use catmap::process_memory::{peak_resident_mib, resident_mib};
-use catmap::stream::{FrameStream, stream_positions};
 use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
 use catmap::{CameraIntrinsics, MapperConfig, RgbdFrame};
 use catmap_systems::Mapper;

@@ -23,8 +23,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use catmap::dataset::FrameSource;
+use catmap::dataset::stream::{FrameStream, stream_positions};
 use catmap::process_memory::{peak_resident_mib, resident_mib};
-use catmap::stream::{FrameStream, stream_positions};
 use catmap::synth::geometry::SceneGeometry;
 use catmap::synth::render::render_view;
 use catmap::synth::trajectory::look_rotation;

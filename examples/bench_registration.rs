@@ -8,7 +8,7 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use catmap::nearest::PointIndex;
+use catmap::geometry::nearest::PointIndex;
 use catmap::registration::chamfer::trimmed_normalised_chamfer;
 use catmap::registration::{RegistrationConfig, register_to_representative, voxel_centroids};
 use catmap::synth::{Design, RegistrationTrial, RegistrationTrialSpec};

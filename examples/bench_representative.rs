@@ -13,11 +13,11 @@
 
 use std::collections::BTreeMap;
 
-use catmap::classes::replica_name;
+use catmap::categories::uncertainty::{RepresentativeChoice, choose_representative};
 use catmap::config::FieldConfig;
 use catmap::dataset::FrameSource;
+use catmap::dataset::classes::replica_name;
 use catmap::synth::{Preset, SyntheticScene};
-use catmap::uncertainty::{RepresentativeChoice, choose_representative};
 use catmap::{MapperConfig, ObjectId};
 use catmap_systems::Mapper;
 use clap::Parser;

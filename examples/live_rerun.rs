@@ -12,7 +12,7 @@ use std::sync::Arc;
 use anyhow::Context as _;
 use catmap::MapperConfig;
 use catmap::dataset::FrameSource;
-use catmap::stream::{FrameStream, stream_positions};
+use catmap::dataset::stream::{FrameStream, stream_positions};
 use catmap::synth::{Preset, SyntheticScene};
 use catmap_systems::Mapper;
 use clap::Parser;

@@ -7,8 +7,8 @@
 
 use std::collections::BTreeMap;
 
-use catmap::classes::replica_name;
 use catmap::dataset::FrameSource;
+use catmap::dataset::classes::replica_name;
 use catmap::synth::{Preset, SyntheticScene};
 use catmap::{MapperConfig, ObjectId};
 use catmap_systems::Mapper;

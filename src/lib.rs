@@ -1,42 +1,42 @@
 //! catmap: object-level RGB-D mapping with category-level neural fields.
 //!
-//! This crate holds data types and pure algorithms (geometry, readers, synthetic scenes); the
-//! streaming mapper that wires them into `bevy_ecs` systems lives in `catmap-systems`.
+//! This crate holds data types and pure algorithms; the streaming mapper that wires them into
+//! `bevy_ecs` systems lives in `catmap-systems`. The modules follow the method (docs/METHOD.md)
+//! from the sensor to the scores.
 
-pub mod classes;
-pub mod config;
+// Input: posed RGB-D frames with instance masks, from a dataset or the synthetic generator.
 pub mod dataset;
+pub mod sensor;
+pub mod synth;
+
+// §1 Objects: what each frame says about an object, its keyframes, cloud and box.
+pub mod objects;
+
+// §2 Per-object occupancy fields, trained as one batched model, and which get steps.
+pub mod field;
+pub mod training;
+
+// §3–§5 Categories: uncertainty and representatives, registration and subcategories, NOCS.
+pub mod categories;
+pub mod registration;
+
+// §6 Meshes and the paper's metrics.
+pub mod meshing;
+pub mod metrics;
+
+// Shared by every layer.
+pub mod checkpoint;
+pub mod config;
 pub mod error;
-pub mod frame;
+pub mod geometry;
 pub mod ids;
+pub mod rng;
+
+// Process and file helpers.
+pub mod atomic_file;
+pub mod process_memory;
 
 pub use config::MapperConfig;
 pub use error::{CatmapError, Result};
-pub use frame::{CameraIntrinsics, InstanceLabel, InstanceMask, RgbdFrame, SharedFrame};
 pub use ids::{ClassId, FrameIndex, ObjectId};
-pub mod atomic_file;
-pub mod category;
-pub mod category_field_plan;
-pub mod checkpoint;
-pub mod class_registration;
-pub mod field;
-pub mod frame_observation;
-pub mod image_ops;
-pub mod keyframes;
-pub mod mesh;
-pub mod meshing;
-pub mod metrics;
-pub mod nearest;
-pub mod nocs;
-pub mod object_bounds;
-pub mod object_view;
-pub mod observed_cloud;
-pub mod oriented_box;
-pub mod pixel_box;
-pub mod process_memory;
-pub mod registration;
-pub mod rng;
-pub mod stream;
-pub mod synth;
-pub mod training;
-pub mod uncertainty;
+pub use sensor::frame::{CameraIntrinsics, InstanceLabel, InstanceMask, RgbdFrame, SharedFrame};

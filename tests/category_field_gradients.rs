@@ -6,7 +6,7 @@ use candle_core::DType;
 use catmap::field::category::reference::category_reference;
 use catmap::field::{AdamWConfig, Backend, CategoryBatch, CategoryField, CategorySamples, ParamLayout, RaySamples};
 use catmap::ids::ObjectId;
-use catmap::object_view::PixelState;
+use catmap::objects::object_view::PixelState;
 use catmap::rng::{RngStream, seeded_rng};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;

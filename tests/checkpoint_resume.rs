@@ -7,8 +7,8 @@ use std::sync::Arc;
 
 use catmap::config::FieldConfig;
 use catmap::dataset::FrameSource;
+use catmap::dataset::stream::StreamMessage;
 use catmap::meshing::MapMeshes;
-use catmap::stream::StreamMessage;
 use catmap::synth::{Preset, SyntheticScene};
 use catmap::{MapperConfig, RgbdFrame};
 use catmap_systems::Mapper;

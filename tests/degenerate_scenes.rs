@@ -6,7 +6,7 @@ use catmap::dataset::FrameSource;
 use std::sync::{Arc, Mutex};
 
 use catmap::InstanceLabel;
-use catmap::stream::FrameStream;
+use catmap::dataset::stream::FrameStream;
 use catmap::synth::{Preset, SyntheticScene};
 use catmap::{MapperConfig, ObjectId, RgbdFrame};
 use catmap_systems::Mapper;

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::LazyLock;
 
 use catmap::ObjectId;
-use catmap::mesh::TriangleMesh;
+use catmap::geometry::mesh::TriangleMesh;
 use catmap::metrics::{
     Crop, EvaluationReport, ObjectMetrics, PredictionStatus, SAMPLES_PER_MESH, evaluate_dirs, render_markdown,
 };

@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use catmap::dataset::FrameSource;
-use catmap::mesh::TriangleMesh;
+use catmap::geometry::mesh::TriangleMesh;
 use catmap::synth::{Design, Preset, SceneDescription, SyntheticScene, write_replica_layout};
 use catmap::{InstanceLabel, ObjectId};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};

@@ -3,10 +3,10 @@
 //! surface are certain hits (high u, high g), rays through empty space certain misses (low u,
 //! high g). Rays into the never-seen +x half are printed (the issue expects medium u, low g).
 
+use catmap::categories::uncertainty::{UncertaintyConfig, ray_uncertainty, reliability};
 use catmap::field::{AdamWConfig, FieldBatch, OBJECT_HIDDEN, OccupancyField, RaySamples, SampleBatch};
-use catmap::object_view::PixelState;
+use catmap::objects::object_view::PixelState;
 use catmap::rng::{RngStream, seeded_rng, standard_normal_f32};
-use catmap::uncertainty::{UncertaintyConfig, ray_uncertainty, reliability};
 use nalgebra::{Point3, Vector3};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;

@@ -40,7 +40,7 @@ pub struct MapperConfig {
     /// Mesh extraction.
     pub meshes: MeshConfig,
     /// Category-level registration: representatives, subcategories, NOCS frames.
-    pub categories: crate::class_registration::CategoryConfig,
+    pub categories: crate::categories::class_registration::CategoryConfig,
     /// Category-level fields (category mode).
     pub category_fields: CategoryFieldConfig,
     /// Live visualisation.

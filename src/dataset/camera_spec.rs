@@ -10,7 +10,7 @@ use std::path::Path;
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion};
 
 use crate::error::{CatmapError, Result};
-use crate::frame::CameraIntrinsics;
+use crate::sensor::frame::CameraIntrinsics;
 
 /// Largest camera translation accepted, metres: farther is a corrupt file (and would not survive the
 /// conversion to 32-bit floats).

@@ -2,15 +2,17 @@
 //! built-in synthetic scenes, all behind [`FrameSource`].
 
 pub mod camera_spec;
+pub mod classes;
 pub mod decode_guard;
 pub mod images;
 pub mod replica;
 pub mod resize;
 pub mod scannet;
+pub mod stream;
 
 use crate::error::Result;
-use crate::frame::{CameraIntrinsics, RgbdFrame};
 use crate::ids::FrameIndex;
+use crate::sensor::frame::{CameraIntrinsics, RgbdFrame};
 
 /// A sequence of posed RGB-D frames that can be decoded in any order, from any thread.
 pub trait FrameSource: Send + Sync {

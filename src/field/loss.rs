@@ -18,7 +18,7 @@
 
 use super::render::{RayRender, RenderGrad};
 use super::samples::RaySamples;
-use crate::object_view::PixelState;
+use crate::objects::object_view::PixelState;
 
 /// Weight of the colour term.
 pub const COLOUR_WEIGHT: f32 = 5.0;

@@ -17,7 +17,7 @@ use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
 use super::samples::RaySamples;
-use crate::object_view::{ObjectView, PixelState};
+use crate::objects::object_view::{ObjectView, PixelState};
 
 /// How one field's rays are drawn for a training step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -221,9 +221,9 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::frame::CameraIntrinsics;
     use crate::ids::FrameIndex;
-    use crate::pixel_box::PixelBox;
+    use crate::sensor::frame::CameraIntrinsics;
+    use crate::sensor::pixel_box::PixelBox;
 
     /// A 4×2 view 2 m in front of a camera at (0, 0, -2): left half this object, right half other.
     fn view(frame: u64, depth: f32) -> ObjectView {

@@ -16,7 +16,7 @@ use super::occupancy::ALPHA_SCALE;
 use super::render::FREE_EPS;
 use super::samples::RaySamples;
 use crate::error::{CatmapError, Result};
-use crate::object_view::PixelState;
+use crate::objects::object_view::PixelState;
 
 pub(crate) fn ce(e: candle_core::Error) -> CatmapError {
     CatmapError::Degenerate(format!("candle: {e}"))

@@ -5,7 +5,7 @@
 //! to the field's object.
 
 use crate::error::{CatmapError, Result};
-use crate::object_view::PixelState;
+use crate::objects::object_view::PixelState;
 
 /// One field's rays for one training step.
 #[derive(Debug, Clone, PartialEq, Default)]

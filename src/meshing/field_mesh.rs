@@ -4,11 +4,11 @@
 use nalgebra::Point3;
 
 use super::object_grid::{ObjectFrame, ObjectMeshConfig, extract_object_mesh, paint_vertices};
+use crate::categories::nocs::NocsFrame;
 use crate::error::Result;
 use crate::field::OccupancyField;
 use crate::field::category::CategoryField;
-use crate::mesh::TriangleMesh;
-use crate::nocs::NocsFrame;
+use crate::geometry::mesh::TriangleMesh;
 
 /// Meshes `field` (defined relative to `field_origin`, i.e. at world point `p` it is evaluated at
 /// `p − field_origin`) over the grid of `frame`. An unoccupied field gives an empty mesh.
@@ -91,7 +91,7 @@ mod tests {
 
     use super::*;
     use crate::field::{AdamWConfig, FieldBatch, RaySamples, SampleBatch};
-    use crate::object_view::PixelState;
+    use crate::objects::object_view::PixelState;
 
     /// Rays along +z from z = −1 hitting a plane at z = 0 (in the field frame), over a 0.4 m square.
     fn plane_rays(rng: &mut ChaCha8Rng) -> RaySamples {

@@ -5,8 +5,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use crate::error::{CatmapError, Result};
+use crate::geometry::mesh::TriangleMesh;
 use crate::ids::ObjectId;
-use crate::mesh::TriangleMesh;
 use crate::metrics::mesh_file_name;
 
 /// The meshes of one map.

@@ -16,7 +16,7 @@ use nalgebra::Point3;
 use super::case_table::{CASES, EDGE_CORNERS, Fill};
 use super::sample_grid::SampleGrid;
 use crate::error::{CatmapError, Result};
-use crate::mesh::TriangleMesh;
+use crate::geometry::mesh::TriangleMesh;
 
 /// Smallest fraction of an edge between a vertex and the edge's end samples.
 const EDGE_EPSILON: f64 = 1e-3;

@@ -1,7 +1,7 @@
 //! Surfaces from fields: marching cubes on dense grids, and the per-object meshing grid.
 //!
 //! - [`marching_cubes`] / [`IsoSurfaceExtractor`]: the iso-surface of a scalar grid as a closed,
-//!   welded, outward-oriented [`TriangleMesh`](crate::mesh::TriangleMesh) (inside = value > iso).
+//!   welded, outward-oriented [`TriangleMesh`](crate::geometry::mesh::TriangleMesh) (inside = value > iso).
 //! - [`extract_object_mesh`]: METHOD.md §6 — sample an object's occupancy on a 5 mm grid over its
 //!   enlarged box, one z-layer at a time, and mesh it at occupancy 0.5 in world coordinates;
 //!   [`paint_vertices`] adds colours from the field. By default the grid is sampled coarse to fine

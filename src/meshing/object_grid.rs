@@ -14,8 +14,8 @@ use super::coarse_to_fine::sample_coarse_to_fine;
 use super::marching_cubes::IsoSurfaceExtractor;
 use super::sample_grid::SampleGrid;
 use crate::error::{CatmapError, Result};
-use crate::mesh::TriangleMesh;
-use crate::oriented_box::OrientedBox;
+use crate::geometry::mesh::TriangleMesh;
+use crate::geometry::oriented_box::OrientedBox;
 
 /// Settings of object meshing. A config file lists only what it changes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -61,7 +61,7 @@ pub struct ObjectFrame {
 
 impl ObjectFrame {
     /// The metric, axis-aligned frame of world bounds (scale 1), e.g. the background's cloud.
-    pub fn from_aabb(bounds: &crate::mesh::Aabb) -> Self {
+    pub fn from_aabb(bounds: &crate::geometry::mesh::Aabb) -> Self {
         let pose = nalgebra::Isometry3::translation(bounds.center().x, bounds.center().y, bounds.center().z);
         Self {
             world_from_object: Similarity3::from_isometry(pose, 1.0),

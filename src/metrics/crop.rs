@@ -3,7 +3,7 @@
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
-use crate::oriented_box::OrientedBox;
+use crate::geometry::oriented_box::OrientedBox;
 
 /// vMAP enlarges the ground-truth box by `1 / VMAP_BOX_FILL` for its crop.
 pub const VMAP_BOX_FILL: f32 = 0.9;

@@ -18,8 +18,8 @@ use super::ground_truth::{GroundTruth, ObjectClasses, mesh_file_name};
 use super::object_scores::score_object;
 use super::report::{EvalSettings, EvaluationReport, ObjectMetrics};
 use crate::error::{CatmapError, Result};
+use crate::geometry::mesh::TriangleMesh;
 use crate::ids::ObjectId;
-use crate::mesh::TriangleMesh;
 use crate::rng::{RngStream, seeded_rng};
 
 /// Scores `pred_dir` against the ground truth of `gt_dir` with the default 10 000 samples per

@@ -16,9 +16,9 @@ use serde::{Deserialize, Serialize};
 
 use super::crop::Crop;
 use crate::error::Result;
-use crate::mesh::TriangleMesh;
-use crate::nearest::PointIndex;
-use crate::oriented_box::fit_minimum_volume_box;
+use crate::geometry::mesh::TriangleMesh;
+use crate::geometry::nearest::PointIndex;
+use crate::geometry::oriented_box::fit_minimum_volume_box;
 
 /// Surface samples per mesh (METHOD.md §6).
 pub const SAMPLES_PER_MESH: usize = 10_000;

@@ -8,7 +8,7 @@ use nalgebra::Point3;
 
 use super::cloud::{check_cloud, half_max_extent};
 use crate::error::{CatmapError, Result};
-use crate::nearest::PointIndex;
+use crate::geometry::nearest::PointIndex;
 
 /// CD(P→Q) = mean over p ∈ `from` of the distance to the closest q ∈ `to`, metres.
 pub fn one_way_chamfer(from: &[Point3<f32>], to: &[Point3<f32>]) -> Result<f32> {

@@ -3,7 +3,7 @@
 use nalgebra::Point3;
 
 use crate::error::{CatmapError, Result};
-use crate::observed_cloud::voxel_downsample;
+use crate::objects::observed_cloud::voxel_downsample;
 
 /// Errors unless `points` holds at least `min_points` points, all finite. `what` names the cloud
 /// in the message ("source", "template").
@@ -40,7 +40,7 @@ pub fn voxel_centroids(points: &[Point3<f32>], voxel_m: f32) -> Result<Vec<Point
 /// Scale of a cloud: half the largest edge of its axis-aligned bounding box, max(extent)/2.
 /// Zero for fewer than two distinct points.
 pub fn half_max_extent(points: &[Point3<f32>]) -> f32 {
-    crate::mesh::Aabb::from_points(points).map_or(0.0, |b| b.extent().max() / 2.0)
+    crate::geometry::mesh::Aabb::from_points(points).map_or(0.0, |b| b.extent().max() / 2.0)
 }
 
 #[cfg(test)]

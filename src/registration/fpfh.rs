@@ -10,7 +10,7 @@
 use nalgebra::{Point3, Vector3};
 
 use super::consistency::Correspondence;
-use crate::nearest::PointIndex;
+use crate::geometry::nearest::PointIndex;
 
 /// Bins per angle.
 const BINS: usize = 11;

@@ -10,7 +10,7 @@
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
 
 use super::horn::weighted_rigid;
-use crate::nearest::PointIndex;
+use crate::geometry::nearest::PointIndex;
 
 /// Parameters of [`icp_point_to_point`].
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -8,7 +8,7 @@
 //!   FPFH descriptors ([`fpfh`], normals from [`normals`]) matched by mutual nearest neighbours;
 //! - the TEASER++ back end without scale ([`teaser`]): pairwise-length [`consistency`] graph,
 //!   [`max_clique`], [`gnc_tls`] rotation, [`scalar_tls`] translation;
-//! - point-to-point [`icp`] refinement over a kiddo k-d tree ([`crate::nearest::PointIndex`]);
+//! - point-to-point [`icp`] refinement over a kiddo k-d tree ([`crate::geometry::nearest::PointIndex`]);
 //! - the 24 [`cube_rotations`] as initial orientations, scored by the scale-normalised one-way
 //!   [`chamfer`] distance.
 //!

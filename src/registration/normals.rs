@@ -6,7 +6,7 @@
 
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 
-use crate::nearest::PointIndex;
+use crate::geometry::nearest::PointIndex;
 
 /// Unit normal per point, or `None` where fewer than 3 points lie within `radius_m`.
 pub fn pca_normals(points: &[Point3<f32>], index: &PointIndex, radius_m: f32) -> Vec<Option<Vector3<f32>>> {

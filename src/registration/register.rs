@@ -34,7 +34,7 @@ use super::cube_rotations::cube_rotations;
 use super::icp::{IcpParams, icp_point_to_point};
 use super::robust_start::{RobustTrace, robust_start};
 use crate::error::Result;
-use crate::nearest::PointIndex;
+use crate::geometry::nearest::PointIndex;
 
 /// The best alignment of a source cloud to a template: p_in_template ≈ rotation·p_in_source +
 /// translation.

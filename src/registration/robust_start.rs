@@ -14,7 +14,7 @@ use super::normals::pca_normals;
 use super::teaser::robust_registration;
 use super::{FrontEnd, RegistrationConfig};
 use crate::error::Result;
-use crate::nearest::PointIndex;
+use crate::geometry::nearest::PointIndex;
 
 /// Diagnostics of the front end + TEASER++ back end.
 #[derive(Debug, Clone, PartialEq)]

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::furniture::Design;
 use super::preset::Preset;
 use super::scene::SyntheticScene;
-use crate::classes::replica_name;
+use crate::dataset::classes::replica_name;
 
 /// Seed, preset and every object's ground truth.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -10,9 +10,9 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use super::primitives::{beam, block, cylinder, frustum};
-use crate::classes::replica;
+use crate::dataset::classes::replica;
+use crate::geometry::mesh::TriangleMesh;
 use crate::ids::ClassId;
-use crate::mesh::TriangleMesh;
 
 /// A furniture design. Instances of one design are identical up to their pose.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]

@@ -5,7 +5,7 @@ use nalgebra::{Point3, Vector3};
 
 use super::bvh::{Bvh, Ray};
 use super::room::SurfaceLabel;
-use crate::mesh::TriangleMesh;
+use crate::geometry::mesh::TriangleMesh;
 
 /// Colour of triangles whose mesh has no vertex colours.
 const UNCOLOURED: [u8; 3] = [180, 180, 180];

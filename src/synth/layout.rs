@@ -16,7 +16,7 @@ use super::furniture::Design;
 use super::preset::Furnishing;
 use super::room::{FloorRegion, Room};
 use crate::error::{CatmapError, Result};
-use crate::mesh::Aabb;
+use crate::geometry::mesh::Aabb;
 
 /// Clearance between collision boxes, metres.
 const CLEARANCE_M: f32 = 0.02;

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use super::furniture::Design;
 use super::room::Room;
 use crate::error::CatmapError;
-use crate::frame::CameraIntrinsics;
+use crate::sensor::frame::CameraIntrinsics;
 
 /// A named scene configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]

@@ -6,7 +6,7 @@ use std::f32::consts::TAU;
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
-use crate::mesh::TriangleMesh;
+use crate::geometry::mesh::TriangleMesh;
 
 /// Appends the two triangles of quad `a b c d` (counter-clockwise seen from outside).
 fn push_quad(triangles: &mut Vec<[u32; 3]>, [a, b, c, d]: [u32; 4]) {

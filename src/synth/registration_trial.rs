@@ -18,8 +18,8 @@ use rand_chacha::ChaCha8Rng;
 
 use super::furniture::Design;
 use crate::error::Result;
-use crate::mesh::Aabb;
-use crate::nearest::PointIndex;
+use crate::geometry::mesh::Aabb;
+use crate::geometry::nearest::PointIndex;
 use crate::rng::standard_normal_f32;
 
 /// Samples of the dense surface [`RegistrationTrial::aligned_cloud_distance`] measures against.

@@ -9,9 +9,9 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use rayon::prelude::*;
 
 use super::geometry::{SceneGeometry, SurfaceHit};
-use crate::classes::{is_replica_background, replica};
-use crate::frame::{CameraIntrinsics, InstanceLabel, InstanceMask, RgbdFrame};
+use crate::dataset::classes::{is_replica_background, replica};
 use crate::ids::{ClassId, FrameIndex, ObjectId};
+use crate::sensor::frame::{CameraIntrinsics, InstanceLabel, InstanceMask, RgbdFrame};
 
 /// Farthest surface the renderer reports, metres along the camera z axis.
 pub const MAX_DEPTH_M: f32 = 20.0;
@@ -152,7 +152,7 @@ fn hash2(x: i32, y: i32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::TriangleMesh;
+    use crate::geometry::mesh::TriangleMesh;
     use crate::synth::room::SurfaceLabel;
 
     #[test]

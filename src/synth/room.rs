@@ -5,9 +5,9 @@
 
 use nalgebra::Point3;
 
-use crate::classes::replica;
+use crate::dataset::classes::replica;
+use crate::geometry::mesh::TriangleMesh;
 use crate::ids::ClassId;
-use crate::mesh::TriangleMesh;
 
 /// Instance id of the floor in the instance images.
 pub const FLOOR_INSTANCE_ID: u16 = 100;
@@ -107,7 +107,7 @@ fn quad(corners: [Point3<f32>; 4], rgb: [u8; 3]) -> TriangleMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::classes::is_replica_background;
+    use crate::dataset::classes::is_replica_background;
 
     #[test]
     fn room_surfaces_face_inwards_and_are_background() {

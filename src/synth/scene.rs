@@ -22,10 +22,10 @@ use super::room::{Room, SurfaceLabel};
 use super::trajectory::camera_trajectory;
 use crate::dataset::{FrameSource, frame_index};
 use crate::error::{CatmapError, Result};
-use crate::frame::{CameraIntrinsics, RgbdFrame};
+use crate::geometry::mesh::TriangleMesh;
 use crate::ids::{ClassId, ObjectId};
-use crate::mesh::TriangleMesh;
 use crate::rng::{RngStream, seeded_rng};
+use crate::sensor::frame::{CameraIntrinsics, RgbdFrame};
 
 /// Surface samples per object for the observed-surface fraction.
 pub const OBSERVATION_SAMPLES: usize = 2000;

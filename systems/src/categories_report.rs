@@ -64,7 +64,7 @@ pub fn category_records(world: &mut World) -> Vec<ClassRecord> {
         .iter(world)
         .map(|(category, subcategories)| ClassRecord {
             class: category.class,
-            name: catmap::classes::replica_name(category.class).map(str::to_owned),
+            name: catmap::dataset::classes::replica_name(category.class).map(str::to_owned),
             subcategories: subcategories.map_or_else(Vec::new, |s| {
                 s.groups
                     .iter()

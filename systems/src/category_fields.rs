@@ -7,10 +7,10 @@ use std::collections::BTreeMap;
 
 use bevy_ecs::prelude::*;
 use catmap::ObjectId;
-use catmap::category_field_plan::plan_category_fields;
+use catmap::categories::field_plan::plan_category_fields;
+use catmap::categories::nocs::NocsFrame;
 use catmap::field::category::{CategoryBatch, CategoryField, CategorySamples};
 use catmap::field::{AdamWConfig, sample_training_rays};
-use catmap::nocs::NocsFrame;
 use catmap::rng::{RngStream, seeded_rng};
 use rayon::prelude::*;
 
@@ -72,7 +72,7 @@ pub struct CategorySlot {
 /// Keeps one category field per multi-member subcategory (subcategories ordered by
 /// representative), whenever a registration changed: creates the fields the first time and,
 /// when a re-registration changes the membership (online), continues each field with the
-/// subcategory sharing most of its members (`catmap::category_field_plan`): members keep their
+/// subcategory sharing most of its members (`catmap::categories::field_plan`): members keep their
 /// codes where they can, and no other field or object loses its training. Every member's slot
 /// follows its latest NOCS frame.
 pub fn sync_category_fields(

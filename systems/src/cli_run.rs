@@ -210,8 +210,8 @@ fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
     }
     if let Some(choice) = args.representative {
         config.categories.representative = match choice {
-            Representative::Uncertainty => catmap::uncertainty::RepresentativeChoice::Uncertainty,
-            Representative::Random => catmap::uncertainty::RepresentativeChoice::Random,
+            Representative::Uncertainty => catmap::categories::uncertainty::RepresentativeChoice::Uncertainty,
+            Representative::Random => catmap::categories::uncertainty::RepresentativeChoice::Random,
         };
     }
     if let Some(schedule) = args.schedule {

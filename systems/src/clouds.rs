@@ -2,8 +2,8 @@
 
 use bevy_ecs::prelude::*;
 use catmap::ObjectId;
-use catmap::object_bounds::{box_is_stale, fit_object_box};
-use catmap::observed_cloud::ObservedCloud;
+use catmap::objects::object_bounds::{box_is_stale, fit_object_box};
+use catmap::objects::observed_cloud::ObservedCloud;
 use rayon::prelude::*;
 
 use crate::components::{Background, CameraFrame, FrameObservations, Object, ObjectBounds, ObjectCloud};

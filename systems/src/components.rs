@@ -3,12 +3,12 @@
 use std::collections::BTreeMap;
 
 use bevy_ecs::prelude::*;
-use catmap::frame_observation::FrameObservation;
-use catmap::keyframes::KeyframeWindow;
-use catmap::object_view::ObjectView;
-use catmap::observed_cloud::ObservedCloud;
-use catmap::oriented_box::OrientedBox;
-use catmap::pixel_box::PixelBox;
+use catmap::geometry::oriented_box::OrientedBox;
+use catmap::objects::frame_observation::FrameObservation;
+use catmap::objects::keyframes::KeyframeWindow;
+use catmap::objects::object_view::ObjectView;
+use catmap::objects::observed_cloud::ObservedCloud;
+use catmap::sensor::pixel_box::PixelBox;
 use catmap::{ClassId, FrameIndex, ObjectId, SharedFrame};
 use rand_chacha::ChaCha8Rng;
 
@@ -126,7 +126,7 @@ pub struct FieldLoss {
 #[derive(Component, Debug, Clone, PartialEq)]
 pub struct FieldMesh {
     /// The mesh.
-    pub mesh: catmap::mesh::TriangleMesh,
+    pub mesh: catmap::geometry::mesh::TriangleMesh,
     /// Training steps the field had taken when it was meshed.
     pub at_step: u64,
     /// Final resolution (`meshes.object`) rather than a preview.
@@ -140,9 +140,9 @@ pub struct FieldMesh {
 #[derive(Component, Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Reliability {
     /// The evaluated sphere.
-    pub sphere: catmap::uncertainty::ObjectReliability,
+    pub sphere: catmap::categories::uncertainty::ObjectReliability,
     /// The cloud and field it was evaluated on.
-    pub stamp: catmap::uncertainty::UncertaintyStamp,
+    pub stamp: catmap::categories::uncertainty::UncertaintyStamp,
 }
 
 /// The object's place in its class: subcategory, representative, alignment and NOCS frame.
@@ -155,17 +155,17 @@ pub struct Membership {
     /// The subcategory's representative.
     pub representative: ObjectId,
     /// Alignment to the representative and the object's box / NOCS frame.
-    pub member: catmap::class_registration::RegisteredMember,
+    pub member: catmap::categories::class_registration::RegisteredMember,
 }
 
 /// A category's subcategories at its latest registration, and the cloud sizes it was computed at.
 #[derive(Component, Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Subcategories {
     /// Subcategories in the order they were split off.
-    pub groups: Vec<catmap::class_registration::RegisteredSubcategory>,
+    pub groups: Vec<catmap::categories::class_registration::RegisteredSubcategory>,
     /// Cloud points of each member when registered.
     pub registered_points: BTreeMap<ObjectId, usize>,
     /// Every pair the registration answered (a pair on unchanged clouds is not searched again).
     #[serde(default)]
-    pub pairs: catmap::class_registration::PairCache,
+    pub pairs: catmap::categories::class_registration::PairCache,
 }

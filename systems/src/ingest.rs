@@ -1,7 +1,7 @@
 //! Ingest stage: frames leave the stream and become `CameraFrame` entities.
 
 use bevy_ecs::prelude::*;
-use catmap::stream::{StreamMessage, StreamStats};
+use catmap::dataset::stream::{StreamMessage, StreamStats};
 
 use crate::components::CameraFrame;
 use crate::resources::{FrameInbox, Settings, StageTimes, StreamProgress};

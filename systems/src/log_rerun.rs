@@ -16,8 +16,8 @@
 use std::collections::BTreeMap;
 
 use bevy_ecs::prelude::*;
-use catmap::classes::replica_name;
-use catmap::image_ops::{downscale_nearest, downscale_rgb};
+use catmap::dataset::classes::replica_name;
+use catmap::sensor::image_ops::{downscale_nearest, downscale_rgb};
 use catmap::{ClassId, InstanceLabel, ObjectId, RgbdFrame};
 use image::ImageEncoder;
 

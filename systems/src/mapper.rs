@@ -7,11 +7,11 @@ use std::time::Duration;
 
 use bevy_ecs::prelude::*;
 use catmap::config::FirstPhase;
-use catmap::keyframes::KeyframeWindow;
+use catmap::dataset::stream::{StreamMessage, StreamStats};
 use catmap::meshing::MapMeshes;
-use catmap::observed_cloud::ObservedCloud;
+use catmap::objects::keyframes::KeyframeWindow;
+use catmap::objects::observed_cloud::ObservedCloud;
 use catmap::rng::{RngStream, seeded_rng};
-use catmap::stream::{StreamMessage, StreamStats};
 use catmap::{MapperConfig, RgbdFrame};
 use crossbeam_channel::{Receiver, Sender, TrySendError, bounded};
 
@@ -78,7 +78,7 @@ impl Mapper {
         Ok(mapper)
     }
 
-    /// A mapper fed by a reader thread's channel (see `catmap::stream::FrameStream`).
+    /// A mapper fed by a reader thread's channel (see `catmap::dataset::stream::FrameStream`).
     pub fn with_inbox(config: MapperConfig, inbox: Receiver<StreamMessage>) -> Result<Self, MapperError> {
         config.validate()?;
         let mut world = World::new();

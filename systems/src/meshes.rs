@@ -1,7 +1,7 @@
 //! Mesh stage: field meshes as previews every few frames, and at final resolution at the end.
 
 use bevy_ecs::prelude::*;
-use catmap::mesh::{Aabb, TriangleMesh};
+use catmap::geometry::mesh::{Aabb, TriangleMesh};
 use catmap::meshing::{MapMeshes, ObjectFrame, ObjectMeshConfig, mesh_category_member, mesh_occupancy_field};
 use catmap::{FrameIndex, ObjectId};
 use rayon::prelude::*;

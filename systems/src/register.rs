@@ -6,10 +6,10 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use bevy_ecs::prelude::*;
-use catmap::class_registration::{ClassRegistration, MemberInput, class_is_due, register_class};
-use catmap::mesh::Aabb;
+use catmap::categories::class_registration::{ClassRegistration, MemberInput, class_is_due, register_class};
+use catmap::categories::uncertainty::{UncertaintyStamp, object_reliability};
+use catmap::geometry::mesh::Aabb;
 use catmap::rng::{RngStream, seeded_rng};
-use catmap::uncertainty::{UncertaintyStamp, object_reliability};
 use catmap::{ClassId, ObjectId};
 use nalgebra::Point3;
 use rayon::prelude::*;
@@ -25,7 +25,7 @@ struct Ready {
     id: ObjectId,
     cloud: Vec<Point3<f32>>,
     cloud_version: u64,
-    bounds: catmap::oriented_box::OrientedBox,
+    bounds: catmap::geometry::oriented_box::OrientedBox,
     slot: FieldSlot,
     stamp: UncertaintyStamp,
     /// Its sphere from an earlier registration, if one was evaluated.

@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use bevy_ecs::prelude::*;
-use catmap::stream::{StreamMessage, StreamStats};
+use catmap::dataset::stream::{StreamMessage, StreamStats};
 use catmap::{ClassId, FrameIndex, MapperConfig, ObjectId};
 use crossbeam_channel::Receiver;
 

@@ -11,7 +11,7 @@ use anyhow::Context as _;
 use catmap::CatmapError;
 use catmap::config::{CheckpointConfig, FirstPhase};
 use catmap::dataset::FrameSource;
-use catmap::stream::{FrameStream, stream_positions};
+use catmap::dataset::stream::{FrameStream, stream_positions};
 use catmap_systems::Mapper;
 
 use crate::progress::bar;

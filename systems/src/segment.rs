@@ -1,7 +1,7 @@
 //! Segment stage: each new frame's instance mask is split into per-object observations.
 
 use bevy_ecs::prelude::*;
-use catmap::frame_observation::observe_objects;
+use catmap::objects::frame_observation::observe_objects;
 
 use crate::components::{CameraFrame, FrameObservations};
 use crate::resources::{Settings, SmallInstances, StageTimes};

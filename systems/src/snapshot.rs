@@ -2,7 +2,7 @@
 //! and tools. Taking one never changes the world.
 
 use bevy_ecs::prelude::*;
-use catmap::oriented_box::OrientedBox;
+use catmap::geometry::oriented_box::OrientedBox;
 use catmap::{ClassId, FrameIndex, ObjectId};
 use nalgebra::Point3;
 use serde::Serialize;

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::Context as _;
-use catmap::classes::replica_name;
+use catmap::dataset::classes::replica_name;
 use catmap::metrics::{ClassLabel, ObjectClasses};
 use catmap::{ClassId, ObjectId};
 use serde::{Deserialize, Serialize};
@@ -32,7 +32,7 @@ pub struct ObjectRow {
     /// `translation` in metres: the box centre) and `half_extents` in metres. `None` while the
     /// cloud was too small to fit one.
     #[serde(default)]
-    pub bounds: Option<catmap::oriented_box::OrientedBox>,
+    pub bounds: Option<catmap::geometry::oriented_box::OrientedBox>,
 }
 
 /// What a run did and how long each stage took.

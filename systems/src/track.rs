@@ -1,12 +1,12 @@
 //! Track stage: object entities appear for new instance ids and take in each frame's view of them.
 
 use bevy_ecs::prelude::*;
-use catmap::frame_observation::majority_class;
-use catmap::keyframes::{Admission, KeyframeRole};
-use catmap::object_view::{ObjectView, ViewOwner};
-use catmap::observed_cloud::ObservedCloud;
-use catmap::pixel_box::PixelBox;
+use catmap::objects::frame_observation::majority_class;
+use catmap::objects::keyframes::{Admission, KeyframeRole};
+use catmap::objects::object_view::{ObjectView, ViewOwner};
+use catmap::objects::observed_cloud::ObservedCloud;
 use catmap::rng::{RngStream, seeded_rng};
+use catmap::sensor::pixel_box::PixelBox;
 
 use crate::components::{
     Background, CameraFrame, ClassVotes, FrameObservations, Keyframes, LatestBox, Object, ObjectClass, ObjectCloud,

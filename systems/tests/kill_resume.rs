@@ -9,7 +9,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use catmap::checkpoint::{MANIFEST, verify_checkpoint};
-use catmap::mesh::TriangleMesh;
+use catmap::geometry::mesh::TriangleMesh;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -46,7 +46,7 @@ mod tests {
     use nalgebra::{Isometry3, Vector3};
 
     use super::*;
-    use crate::object_view::PixelState;
+    use crate::objects::object_view::PixelState;
 
     #[test]
     fn points_land_in_nocs_and_members_are_recorded() {

@@ -18,7 +18,7 @@ use super::super::render::FREE_EPS;
 use super::super::samples::RaySamples;
 use super::{CODE_REG_WEIGHT, CategoryField, CategorySamples};
 use crate::error::{CatmapError, Result};
-use crate::object_view::PixelState;
+use crate::objects::object_view::PixelState;
 
 /// Losses and gradients of the reference category model on one category's rays.
 #[derive(Debug, Clone, PartialEq, Default)]

@@ -5,9 +5,9 @@
 use std::collections::BTreeMap;
 
 use crate::config::ObjectConfig;
-use crate::frame::{InstanceLabel, RgbdFrame};
 use crate::ids::{ClassId, ObjectId};
-use crate::pixel_box::PixelBox;
+use crate::sensor::frame::{InstanceLabel, RgbdFrame};
+use crate::sensor::pixel_box::PixelBox;
 
 /// One object as seen in one frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -130,8 +130,8 @@ mod tests {
     use nalgebra::Isometry3;
 
     use super::*;
-    use crate::frame::{CameraIntrinsics, InstanceMask};
     use crate::ids::FrameIndex;
+    use crate::sensor::frame::{CameraIntrinsics, InstanceMask};
 
     fn frame_with(labels: &[InstanceLabel], classes: &[u32], width: u32) -> RgbdFrame {
         let height = labels.len() as u32 / width;

@@ -16,11 +16,11 @@ pub use config::{CategoryConfig, RegistrationStart};
 pub use pair_cache::{CachedPair, PairCache, PairVersions};
 pub use pairs::PairPoints;
 
-use crate::category::{Alignment, subcategorize};
+use crate::categories::nocs::{NocsFrame, aligned_member_frame, representative_frame};
+use crate::categories::subcategories::{Alignment, subcategorize};
 use crate::error::{CatmapError, Result};
+use crate::geometry::oriented_box::OrientedBox;
 use crate::ids::ObjectId;
-use crate::nocs::{NocsFrame, aligned_member_frame, representative_frame};
-use crate::oriented_box::OrientedBox;
 use crate::registration::voxel_centroids;
 use pairs::ClassClouds;
 
@@ -190,7 +190,7 @@ mod tests {
 
     /// Two copies of one chair design and a table, each a partial, noisy view.
     fn three_members() -> Vec<MemberInput> {
-        use crate::oriented_box::fit_minimum_volume_box;
+        use crate::geometry::oriented_box::fit_minimum_volume_box;
         use crate::synth::{Design, RegistrationTrial, RegistrationTrialSpec};
         let spec = RegistrationTrialSpec {
             outlier_fraction: 0.0,

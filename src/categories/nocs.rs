@@ -11,7 +11,7 @@ use nalgebra::{Isometry3, Point3, Similarity3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CatmapError, Result};
-use crate::oriented_box::OrientedBox;
+use crate::geometry::oriented_box::OrientedBox;
 
 /// A member's box and normalised frame.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

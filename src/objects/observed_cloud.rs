@@ -8,7 +8,7 @@ use std::hash::{BuildHasherDefault, Hasher};
 
 use nalgebra::{Point3, Vector3};
 
-use crate::frame::RgbdFrame;
+use crate::sensor::frame::RgbdFrame;
 
 /// Packs a voxel coordinate into one integer key (21 bits per axis, ±10 km at 1 cm).
 #[inline]
@@ -192,8 +192,8 @@ mod tests {
 
     #[test]
     fn pixel_runs_give_the_same_cloud_as_single_points() {
-        use crate::frame::{CameraIntrinsics, InstanceMask};
         use crate::ids::{ClassId, FrameIndex};
+        use crate::sensor::frame::{CameraIntrinsics, InstanceMask};
         let (width, height) = (8, 4);
         let frame = RgbdFrame {
             index: FrameIndex(0),

@@ -2,10 +2,10 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::category::SubcategoryRule;
+use crate::categories::subcategories::SubcategoryRule;
+use crate::categories::uncertainty::{RepresentativeChoice, UncertaintyConfig};
 use crate::config::FieldConfig;
 use crate::registration::RegistrationConfig;
-use crate::uncertainty::{RepresentativeChoice, UncertaintyConfig};
 
 /// Settings of category-level registration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -4,9 +4,9 @@
 
 use nalgebra::Isometry3;
 
-use crate::frame::{CameraIntrinsics, InstanceLabel, RgbdFrame};
 use crate::ids::{FrameIndex, ObjectId};
-use crate::pixel_box::PixelBox;
+use crate::sensor::frame::{CameraIntrinsics, InstanceLabel, RgbdFrame};
+use crate::sensor::pixel_box::PixelBox;
 
 /// A pixel's relation to the object being trained.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -106,8 +106,8 @@ impl ObjectView {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::InstanceMask;
     use crate::ids::ClassId;
+    use crate::sensor::frame::InstanceMask;
 
     #[test]
     fn a_crop_keeps_the_region_with_states_relative_to_its_owner() {

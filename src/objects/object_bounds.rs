@@ -2,8 +2,8 @@
 
 use crate::config::ObjectConfig;
 use crate::error::{CatmapError, Result};
-use crate::observed_cloud::{ObservedCloud, voxel_downsample};
-use crate::oriented_box::{OrientedBox, fit_minimum_volume_box};
+use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box};
+use crate::objects::observed_cloud::{ObservedCloud, voxel_downsample};
 
 /// Fewest cloud voxels an object needs before it gets a box.
 pub const MIN_POINTS_FOR_BOX: usize = 10;

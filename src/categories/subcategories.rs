@@ -13,9 +13,9 @@ use nalgebra::Isometry3;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
+use crate::categories::uncertainty::{RepresentativeChoice, choose_representative};
 use crate::error::Result;
 use crate::ids::ObjectId;
-use crate::uncertainty::{RepresentativeChoice, choose_representative};
 
 /// Thresholds of the subcategory rule (the reference code's values).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -1,7 +1,7 @@
 //! Ray-based uncertainty of an object's field and the representative of a class (METHOD.md §3).
 //!
 //! Rays start on a sphere around the object — centre = the centre of the observed cloud's
-//! axis-aligned box ([`crate::mesh::Aabb`]), radius `r` = 1.2 × that box's half-diagonal (every
+//! axis-aligned box ([`crate::geometry::mesh::Aabb`]), radius `r` = 1.2 × that box's half-diagonal (every
 //! half-extent at least 5 cm) — at φ ∈ linspace(0, π, n) ×
 //! θ ∈ linspace(0, 2π, n), and cross to the antipodal point with 96 stratified samples in [0, 2r].
 //! Along a ray, with the reference code's sharper occupancy o_i = σ(10·α_i):

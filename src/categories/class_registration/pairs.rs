@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use super::config::RegistrationStart;
 use super::pair_cache::{CachedPair, PairCache, PairVersions};
 use super::warm_start_holds;
-use crate::category::PairRegistration;
+use crate::categories::subcategories::PairRegistration;
 use crate::error::{CatmapError, Result};
 use crate::ids::ObjectId;
 use crate::registration::{

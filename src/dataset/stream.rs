@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 use crossbeam_channel::{Receiver, Sender, bounded};
 
 use crate::dataset::FrameSource;
-use crate::frame::SharedFrame;
+use crate::sensor::frame::SharedFrame;
 
 /// One message of the stream, in order.
 #[derive(Debug, Clone)]
@@ -119,8 +119,8 @@ mod tests {
 
     use super::*;
     use crate::error::CatmapError;
-    use crate::frame::{CameraIntrinsics, InstanceMask, RgbdFrame};
     use crate::ids::{ClassId, FrameIndex};
+    use crate::sensor::frame::{CameraIntrinsics, InstanceMask, RgbdFrame};
 
     /// Tiny frames; position 2 fails to decode.
     struct Fake(usize);

@@ -1,0 +1,6 @@
+//! Geometry shared by every layer: oriented boxes, nearest-neighbour queries, triangle meshes and
+//! their PLY files.
+
+pub mod mesh;
+pub mod nearest;
+pub mod oriented_box;

@@ -1,0 +1,8 @@
+//! What the map keeps of one object (METHOD.md §1): what each frame says about it, its keyframes
+//! and the crops it keeps of them, its observed point cloud and its oriented box.
+
+pub mod frame_observation;
+pub mod keyframes;
+pub mod object_bounds;
+pub mod object_view;
+pub mod observed_cloud;

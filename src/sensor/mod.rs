@@ -1,0 +1,6 @@
+//! Sensor data: one posed RGB-D frame with its instance masks, image-space boxes, and the small
+//! image operations used for display.
+
+pub mod frame;
+pub mod image_ops;
+pub mod pixel_box;
