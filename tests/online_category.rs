@@ -7,8 +7,9 @@ use catmap::dataset::FrameSource;
 use catmap::synth::{Preset, SyntheticScene};
 use catmap::{MapperConfig, ObjectId};
 use catmap_systems::Mapper;
-use catmap_systems::category_fields::{CategoryFields, CategorySlot};
+use catmap_systems::components::CategorySlot;
 use catmap_systems::components::{FieldMesh, Object};
+use catmap_systems::resources::CategoryFields;
 
 #[test]
 fn category_fields_start_and_train_while_the_scene_streams() {

@@ -187,6 +187,19 @@ impl Default for RerunConfig {
 }
 
 impl MapperConfig {
+    /// Steps every member's field must have taken before its class is registered: online,
+    /// `categories.min_field_steps`; offline, all of the per-object training (as the reference
+    /// code, which ranks uncertainty on the finished vMAP fields — early fields are confidently
+    /// wrong in space no camera saw, which hides how well each member was observed).
+    pub fn field_steps_before_registration(&self) -> u64 {
+        let min = self.categories.min_field_steps;
+        if self.fields.offline {
+            min.max(self.fields.offline_iterations as u64)
+        } else {
+            min
+        }
+    }
+
     /// Parses a TOML file's text; unknown keys and wrong types are errors.
     pub fn from_toml(text: &str) -> Result<Self> {
         let config: Self = toml::from_str(text).map_err(|e| CatmapError::Config(e.to_string()))?;
@@ -384,5 +397,33 @@ mod tests {
         // Found by the config fuzzer: the channel reserved 240 GB and the process aborted.
         let err = MapperConfig::from_toml("[stream]\nchannel_capacity = 4294967295\n").expect_err("must fail");
         assert!(err.to_string().contains("between 1 and 1024"), "{err}");
+    }
+
+    #[test]
+    fn offline_classes_wait_for_the_whole_per_object_training() {
+        let with_fields = |fields: FieldConfig| MapperConfig {
+            fields,
+            ..MapperConfig::default()
+        };
+        let min = MapperConfig::default().categories.min_field_steps;
+        assert_eq!(
+            with_fields(FieldConfig::default()).field_steps_before_registration(),
+            min
+        );
+        let offline = FieldConfig {
+            offline: true,
+            offline_iterations: 1_500,
+            ..FieldConfig::default()
+        };
+        assert_eq!(with_fields(offline.clone()).field_steps_before_registration(), 1_500);
+        let short = FieldConfig {
+            offline_iterations: 50,
+            ..offline
+        };
+        assert_eq!(
+            with_fields(short).field_steps_before_registration(),
+            min,
+            "never before the fields are trusted at all"
+        );
     }
 }

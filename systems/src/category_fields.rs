@@ -9,65 +9,16 @@ use bevy_ecs::prelude::*;
 use catmap::ObjectId;
 use catmap::categories::field_plan::plan_category_fields;
 use catmap::categories::nocs::NocsFrame;
-use catmap::field::category::{CategoryBatch, CategoryField, CategorySamples};
-use catmap::field::{AdamWConfig, sample_training_rays};
+use catmap::field::category::{CategoryField, CategorySamples};
+use catmap::field::sample_training_rays;
 use catmap::rng::{RngStream, seeded_rng};
 use rayon::prelude::*;
 
 use catmap::FrameIndex;
 use catmap::training::{FieldFacts, LastSeen, category_field_facts};
 
-use crate::components::{CameraFrame, FieldRng, FieldSlot, Keyframes, LatestBox, Object, Subcategories};
-use crate::resources::{Settings, StageTimes, StreamProgress, TrainingSchedule};
-
-/// The category fields and their members.
-#[derive(Resource, Debug)]
-pub struct CategoryFields {
-    /// One field per multi-member subcategory, trained together.
-    pub batch: CategoryBatch,
-    /// Per field, its members in code order.
-    pub members: Vec<Vec<ObjectId>>,
-    /// Per field, its creation number (its key in the step scheduler; kept while the field
-    /// continues under a new membership).
-    pub ids: Vec<u32>,
-    /// Steps queued and not yet run.
-    pub pending: u64,
-    /// Steps run.
-    pub steps_done: u64,
-    /// Latest total loss per field.
-    pub losses: Vec<f32>,
-    /// Fields created so far (seeds the next one's generator).
-    pub fields_created: u32,
-    /// Membership changes applied so far (seeds the fresh codes of the next one).
-    pub remaps: u32,
-}
-
-impl CategoryFields {
-    /// No fields yet.
-    pub fn new(optimiser: AdamWConfig) -> Self {
-        Self {
-            batch: CategoryBatch::new(optimiser),
-            members: Vec::new(),
-            ids: Vec::new(),
-            pending: 0,
-            steps_done: 0,
-            losses: Vec::new(),
-            fields_created: 0,
-            remaps: 0,
-        }
-    }
-}
-
-/// A member's place in a category field.
-#[derive(Component, Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct CategorySlot {
-    /// Index of the category field.
-    pub field: usize,
-    /// The member's code index.
-    pub member: usize,
-    /// The member's NOCS frame.
-    pub nocs: NocsFrame,
-}
+use crate::components::{CameraFrame, CategorySlot, FieldRng, FieldSlot, Keyframes, LatestBox, Object, Subcategories};
+use crate::resources::{CategoryFields, Settings, StageTimes, StreamProgress, TrainingSchedule};
 
 /// Keeps one category field per multi-member subcategory (subcategories ordered by
 /// representative), whenever a registration changed: creates the fields the first time and,
@@ -216,7 +167,7 @@ pub fn train_category_fields(
     let _timer = times.start("category_train");
     let config = &settings.0;
     let tick: Vec<FrameIndex> = frames.iter().map(|f| f.0.index).collect();
-    let phase = crate::train::stream_phase(&progress);
+    let phase = progress.phase();
     let fields = &mut *fields;
     let mut last_seen: Vec<Vec<LastSeen>> = vec![Vec::new(); fields.members.len()];
     for (.., slot, latest, _) in &members {

@@ -16,11 +16,12 @@ use catmap::checkpoint::{
 use catmap::{CatmapError, ClassId, MapperConfig, ObjectId};
 use serde::{Deserialize, Serialize};
 
-use crate::category_fields::{CategoryFields, CategorySlot};
+use crate::components::CategorySlot;
 use crate::components::{
     Background, Category, ClassVotes, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Membership, Object,
     ObjectBounds, ObjectClass, ObjectCloud, ObjectRng, Reliability, Subcategories, VisibleFrames,
 };
+use crate::resources::CategoryFields;
 use crate::resources::{
     CategoryIndex, Fields, ObjectIndex, PhaseProgress, Settings, StageTimes, StreamProgress, TrainingQueue,
     TrainingSchedule,

@@ -8,7 +8,7 @@ use anyhow::Context as _;
 use catmap_systems::Mapper;
 
 use crate::cli_synth::{PresetArg, write_scene};
-use crate::run_plan::{Recording, RunPlan};
+use crate::run_plan::{DatasetFormat, MapMode, Recording, RunPlan};
 
 /// Arguments of `catmap run`.
 #[derive(clap::Args, Debug)]
@@ -110,24 +110,6 @@ pub enum Switch {
     On,
     /// Disabled.
     Off,
-}
-
-/// Field models.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum MapMode {
-    /// Category-level fields shared by objects of one shape (the paper; the default).
-    Category,
-    /// One occupancy field per object (the paper's vMAP* baseline).
-    Instance,
-}
-
-/// Dataset layouts.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum DatasetFormat {
-    /// Replica in vMAP's layout (also what `catmap synth` writes).
-    Replica,
-    /// ScanNet (SensReader output + 2D labels).
-    Scannet,
 }
 
 /// Runs `catmap run` (or continues one with `--resume`).

@@ -3,6 +3,7 @@
 use std::collections::BTreeMap;
 
 use bevy_ecs::prelude::*;
+use catmap::categories::nocs::NocsFrame;
 use catmap::geometry::oriented_box::OrientedBox;
 use catmap::objects::frame_observation::FrameObservation;
 use catmap::objects::keyframes::KeyframeWindow;
@@ -168,4 +169,15 @@ pub struct Subcategories {
     /// Every pair the registration answered (a pair on unchanged clouds is not searched again).
     #[serde(default)]
     pub pairs: catmap::categories::class_registration::PairCache,
+}
+
+/// A member's place in a category field.
+#[derive(Component, Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CategorySlot {
+    /// Index of the category field.
+    pub field: usize,
+    /// The member's code index.
+    pub member: usize,
+    /// The member's NOCS frame.
+    pub nocs: NocsFrame,
 }

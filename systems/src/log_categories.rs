@@ -4,9 +4,10 @@
 
 use bevy_ecs::prelude::*;
 
-use crate::category_fields::{CategoryFields, CategorySlot};
+use crate::components::CategorySlot;
 use crate::components::Object;
 use crate::log_rerun::{Rerun, paths, warn_on_error};
+use crate::resources::CategoryFields;
 
 /// The timeline of the category phase.
 pub const CATEGORY_TIMELINE: &str = "category_step";

@@ -15,10 +15,10 @@ use catmap::rng::{RngStream, seeded_rng};
 use catmap::{MapperConfig, RgbdFrame};
 use crossbeam_channel::{Receiver, Sender, TrySendError, bounded};
 
-use crate::category_fields::CategoryFields;
 use crate::components::{Background, Keyframes, ObjectCloud, ObjectRng, VisibleFrames};
 use crate::log_rerun::{Rerun, log_world_setup};
 use crate::meshes::collect_meshes;
+use crate::resources::CategoryFields;
 use crate::resources::{
     AfterStreamPhase, CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, SmallInstances,
     StageTimes, StreamProgress, TrainingQueue, TrainingSchedule,

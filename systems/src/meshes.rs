@@ -6,8 +6,9 @@ use catmap::meshing::{MapMeshes, ObjectFrame, ObjectMeshConfig, mesh_category_me
 use catmap::{FrameIndex, ObjectId};
 use rayon::prelude::*;
 
-use crate::category_fields::{CategoryFields, CategorySlot};
+use crate::components::CategorySlot;
 use crate::components::{Background, FieldLoss, FieldMesh, FieldSlot, Object, ObjectBounds, ObjectCloud};
+use crate::resources::CategoryFields;
 use crate::resources::{Fields, Settings, StageTimes, StreamProgress};
 
 /// Fields that can be meshed: objects with a box, and the background with its cloud (members

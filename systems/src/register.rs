@@ -56,7 +56,7 @@ pub fn register_categories(
     if !cfg.enabled || !settings.0.fields.enabled {
         return;
     }
-    let steps_needed = cfg.field_steps_before_registration(&settings.0.fields);
+    let steps_needed = settings.0.field_steps_before_registration();
     let mut due: Vec<(Entity, ClassId, Vec<Ready>, ClassRegistration)> = Vec::new();
     for (entity, category, previous) in &categories {
         let mut ready = Vec::new();

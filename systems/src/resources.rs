@@ -5,6 +5,9 @@ use std::time::{Duration, Instant};
 
 use bevy_ecs::prelude::*;
 use catmap::dataset::stream::{StreamMessage, StreamStats};
+use catmap::field::AdamWConfig;
+use catmap::field::category::CategoryBatch;
+use catmap::training::StreamPhase;
 use catmap::{ClassId, FrameIndex, MapperConfig, ObjectId};
 use crossbeam_channel::Receiver;
 
@@ -27,6 +30,17 @@ pub struct StreamProgress {
     pub last_frame: Option<FrameIndex>,
     /// Set when the end-of-stream message arrived, with the reader's statistics.
     pub ended: Option<StreamStats>,
+}
+
+impl StreamProgress {
+    /// Whether frames still stream in.
+    pub fn phase(&self) -> StreamPhase {
+        if self.ended.is_some() {
+            StreamPhase::Ended
+        } else {
+            StreamPhase::Streaming
+        }
+    }
 }
 
 /// Object entities by dataset instance id.
@@ -164,4 +178,42 @@ pub struct TrainingSchedule {
     pub planned_objects: usize,
     /// Category fields in the latest plan.
     pub planned_categories: usize,
+}
+
+/// The category fields and their members.
+#[derive(Resource, Debug)]
+pub struct CategoryFields {
+    /// One field per multi-member subcategory, trained together.
+    pub batch: CategoryBatch,
+    /// Per field, its members in code order.
+    pub members: Vec<Vec<ObjectId>>,
+    /// Per field, its creation number (its key in the step scheduler; kept while the field
+    /// continues under a new membership).
+    pub ids: Vec<u32>,
+    /// Steps queued and not yet run.
+    pub pending: u64,
+    /// Steps run.
+    pub steps_done: u64,
+    /// Latest total loss per field.
+    pub losses: Vec<f32>,
+    /// Fields created so far (seeds the next one's generator).
+    pub fields_created: u32,
+    /// Membership changes applied so far (seeds the fresh codes of the next one).
+    pub remaps: u32,
+}
+
+impl CategoryFields {
+    /// No fields yet.
+    pub fn new(optimiser: AdamWConfig) -> Self {
+        Self {
+            batch: CategoryBatch::new(optimiser),
+            members: Vec::new(),
+            ids: Vec::new(),
+            pending: 0,
+            steps_done: 0,
+            losses: Vec::new(),
+            fields_created: 0,
+            remaps: 0,
+        }
+    }
 }

@@ -12,8 +12,25 @@ use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
 use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
 use serde::{Deserialize, Serialize};
 
-use crate::cli_run::{DatasetFormat, MapMode};
 use catmap_systems::rrd_file::{RrdFooter, save_rrd};
+
+/// Field models.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum MapMode {
+    /// Category-level fields shared by objects of one shape (the paper; the default).
+    Category,
+    /// One occupancy field per object (the paper's vMAP* baseline).
+    Instance,
+}
+
+/// Dataset layouts.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum DatasetFormat {
+    /// Replica in vMAP's layout (also what `catmap synth` writes).
+    Replica,
+    /// ScanNet (SensReader output + 2D labels).
+    Scannet,
+}
 
 /// Where the Rerun recording goes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -11,13 +11,12 @@ use nalgebra::Point3;
 use rayon::prelude::*;
 
 use catmap::FrameIndex;
-use catmap::training::{FieldFacts, MeshSource, StreamPhase, object_field_facts};
+use catmap::training::{FieldFacts, MeshSource, object_field_facts};
 
-use crate::category_fields::{CategoryFields, CategorySlot};
 use crate::components::{
-    Background, CameraFrame, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Object, ObjectBounds,
+    Background, CameraFrame, CategorySlot, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Object, ObjectBounds,
 };
-use crate::resources::{Fields, Settings, StageTimes, StreamProgress, TrainingQueue, TrainingSchedule};
+use crate::resources::{CategoryFields, Fields, Settings, StageTimes, StreamProgress, TrainingQueue, TrainingSchedule};
 
 /// Gives every object that has a box (and the background, once it has keyframes) its field,
 /// in object-id order so that batch indices do not depend on query order.
@@ -126,7 +125,7 @@ pub fn train_fields(
     let config = &settings.0;
     let cfg = &config.fields;
     let tick: Vec<FrameIndex> = frames.iter().map(|f| f.0.index).collect();
-    let phase = stream_phase(&progress);
+    let phase = progress.phase();
     let facts: Vec<(usize, FieldFacts)> = owners
         .iter()
         .filter_map(|(_, object, latest, member, _, slot, ..)| {
@@ -178,15 +177,6 @@ pub fn train_fields(
             }
         }
         queue.steps_done += 1;
-    }
-}
-
-/// Whether frames still stream in.
-pub fn stream_phase(progress: &StreamProgress) -> StreamPhase {
-    if progress.ended.is_some() {
-        StreamPhase::Ended
-    } else {
-        StreamPhase::Streaming
     }
 }
 

@@ -4,7 +4,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::categories::subcategories::SubcategoryRule;
 use crate::categories::uncertainty::{RepresentativeChoice, UncertaintyConfig};
-use crate::config::FieldConfig;
 use crate::registration::RegistrationConfig;
 
 /// Settings of category-level registration.
@@ -27,7 +26,7 @@ pub struct CategoryConfig {
     pub reregister_growth: f32,
     /// Members' fields must have taken this many steps before their uncertainty is trusted
     /// (online; offline, the whole per-object training: see
-    /// [`CategoryConfig::field_steps_before_registration`]).
+    /// [`crate::MapperConfig::field_steps_before_registration`]).
     pub min_field_steps: u64,
     /// Members' clouds are thinned to this voxel before registration and Chamfer scores, metres.
     pub cloud_voxel_m: f32,
@@ -80,20 +79,6 @@ impl Default for CategoryConfig {
             registration_start: RegistrationStart::Search,
             warm_start_tolerance: 0.1,
             uncertainty_refresh_growth: 0.25,
-        }
-    }
-}
-
-impl CategoryConfig {
-    /// Steps every member's field must have taken before its class is registered: online,
-    /// `min_field_steps`; offline, all of the per-object training (as the reference code, which
-    /// ranks uncertainty on the finished vMAP fields — early fields are confidently wrong in
-    /// space no camera saw, which hides how well each member was observed).
-    pub fn field_steps_before_registration(&self, fields: &FieldConfig) -> u64 {
-        if fields.offline {
-            self.min_field_steps.max(fields.offline_iterations as u64)
-        } else {
-            self.min_field_steps
         }
     }
 }

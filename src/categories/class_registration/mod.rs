@@ -157,7 +157,6 @@ mod tests {
     use nalgebra::Isometry3;
 
     use super::*;
-    use crate::config::FieldConfig;
 
     #[test]
     fn a_class_is_due_when_new_when_its_members_change_or_a_cloud_grows() {
@@ -327,28 +326,6 @@ mod tests {
                 ..first.pairs.0[&(ObjectId(3), ObjectId(1))]
             },
             "searched anew: exactly the first search's answer"
-        );
-    }
-
-    #[test]
-    fn offline_classes_wait_for_the_whole_per_object_training() {
-        let cfg = CategoryConfig::default();
-        let online = FieldConfig::default();
-        assert_eq!(cfg.field_steps_before_registration(&online), cfg.min_field_steps);
-        let offline = FieldConfig {
-            offline: true,
-            offline_iterations: 1_500,
-            ..FieldConfig::default()
-        };
-        assert_eq!(cfg.field_steps_before_registration(&offline), 1_500);
-        let short = FieldConfig {
-            offline_iterations: 50,
-            ..offline
-        };
-        assert_eq!(
-            cfg.field_steps_before_registration(&short),
-            cfg.min_field_steps,
-            "never before the fields are trusted at all"
         );
     }
 
