@@ -13,8 +13,8 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 pub use config::{CategoryConfig, RegistrationStart};
-pub use pair_cache::{CachedPair, PairCache, PairVersions};
-pub use pairs::PairPoints;
+pub use pair_cache::{CachedPair, PairCache, PairPoints, PairVersions};
+pub use pairs::warm_start_holds;
 
 use crate::categories::nocs::{NocsFrame, aligned_member_frame, representative_frame};
 use crate::categories::subcategories::{Alignment, subcategorize};
@@ -146,12 +146,6 @@ pub fn class_is_due(
         })
 }
 
-/// Whether a warm-started registration scoring `warm` may stand in for the full search, given the
-/// pair's stored score.
-pub fn warm_start_holds(warm: f32, stored: f32, tolerance: f32) -> bool {
-    warm.is_finite() && warm <= stored * (1.0 + tolerance)
-}
-
 #[cfg(test)]
 mod tests {
     use nalgebra::Isometry3;
@@ -176,15 +170,6 @@ mod tests {
             class_is_due(Some(&then), &[(a, 1_000), (c, 500)], 0.2),
             "a member was replaced"
         );
-    }
-
-    #[test]
-    fn a_warm_start_holds_only_when_it_scores_no_worse_than_stored_within_tolerance() {
-        assert!(warm_start_holds(0.05, 0.05, 0.1));
-        assert!(warm_start_holds(0.055, 0.05, 0.1));
-        assert!(!warm_start_holds(0.056, 0.05, 0.1));
-        assert!(!warm_start_holds(f32::NAN, 0.05, 0.1));
-        assert!(!warm_start_holds(f32::INFINITY, f32::INFINITY, 0.1));
     }
 
     /// Two copies of one chair design and a table, each a partial, noisy view.
@@ -326,21 +311,6 @@ mod tests {
                 ..first.pairs.0[&(ObjectId(3), ObjectId(1))]
             },
             "searched anew: exactly the first search's answer"
-        );
-    }
-
-    #[test]
-    fn an_alignment_stands_while_neither_cloud_grew_by_more_than_the_growth() {
-        let then = PairPoints {
-            source: 1_000,
-            template: 500,
-        };
-        let now = |source, template| PairPoints { source, template };
-        assert!(then.still_hold(now(1_200, 600), 0.2), "20 % is not more than 20 %");
-        assert!(!then.still_hold(now(1_201, 500), 0.2), "the member's cloud grew");
-        assert!(
-            !then.still_hold(now(1_000, 601), 0.2),
-            "the representative's cloud grew"
         );
     }
 

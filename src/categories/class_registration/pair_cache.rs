@@ -14,7 +14,6 @@ use std::collections::BTreeMap;
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 
-use super::pairs::PairPoints;
 use crate::ids::ObjectId;
 
 /// The versions of a pair's two clouds (source = the member, template = the representative).
@@ -61,6 +60,24 @@ impl PairCache {
     }
 }
 
+/// The sizes of a (member, representative) pair's observed clouds when its alignment was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PairPoints {
+    /// Points of the member's cloud.
+    pub source: usize,
+    /// Points of the representative's cloud.
+    pub template: usize,
+}
+
+impl PairPoints {
+    /// Whether an alignment found at these sizes still stands for clouds of sizes `now`: neither
+    /// grew by more than `growth` (a fraction).
+    pub fn still_hold(&self, now: PairPoints, growth: f32) -> bool {
+        let within = |then: usize, now: usize| now as f64 <= then as f64 * (1.0 + f64::from(growth));
+        within(self.source, now.source) && within(self.template, now.template)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -94,6 +111,21 @@ mod tests {
             cache.unchanged(a, b, moved(10, 21)),
             None,
             "the representative's cloud changed"
+        );
+    }
+
+    #[test]
+    fn an_alignment_stands_while_neither_cloud_grew_by_more_than_the_growth() {
+        let then = PairPoints {
+            source: 1_000,
+            template: 500,
+        };
+        let now = |source, template| PairPoints { source, template };
+        assert!(then.still_hold(now(1_200, 600), 0.2), "20 % is not more than 20 %");
+        assert!(!then.still_hold(now(1_201, 500), 0.2), "the member's cloud grew");
+        assert!(
+            !then.still_hold(now(1_000, 601), 0.2),
+            "the representative's cloud grew"
         );
     }
 }

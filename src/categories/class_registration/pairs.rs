@@ -7,11 +7,9 @@ use std::sync::Mutex;
 use nalgebra::{Isometry3, Point3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 
 use super::config::RegistrationStart;
-use super::pair_cache::{CachedPair, PairCache, PairVersions};
-use super::warm_start_holds;
+use super::pair_cache::{CachedPair, PairCache, PairPoints, PairVersions};
 use crate::categories::subcategories::PairRegistration;
 use crate::error::{CatmapError, Result};
 use crate::ids::ObjectId;
@@ -19,22 +17,10 @@ use crate::registration::{
     RegistrationConfig, normalised_one_way_chamfer, refine_registration, register_to_representative,
 };
 
-/// The sizes of a (member, representative) pair's observed clouds when its alignment was found.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub struct PairPoints {
-    /// Points of the member's cloud.
-    pub source: usize,
-    /// Points of the representative's cloud.
-    pub template: usize,
-}
-
-impl PairPoints {
-    /// Whether an alignment found at these sizes still stands for clouds of sizes `now`: neither
-    /// grew by more than `growth` (a fraction).
-    pub fn still_hold(&self, now: PairPoints, growth: f32) -> bool {
-        let within = |then: usize, now: usize| now as f64 <= then as f64 * (1.0 + f64::from(growth));
-        within(self.source, now.source) && within(self.template, now.template)
-    }
+/// Whether a warm-started registration scoring `warm` may stand in for the full search, given the
+/// pair's stored score.
+pub fn warm_start_holds(warm: f32, stored: f32, tolerance: f32) -> bool {
+    warm.is_finite() && warm <= stored * (1.0 + tolerance)
 }
 
 /// Pairwise registration over a class's thinned clouds.
@@ -197,5 +183,19 @@ impl PairRegistration for ClassClouds<'_> {
         };
         let aligned: Vec<Point3<f32>> = s.iter().map(|p| template_from_source * p).collect();
         normalised_one_way_chamfer(t, &aligned).unwrap_or(f32::INFINITY)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_warm_start_holds_only_when_it_scores_no_worse_than_stored_within_tolerance() {
+        assert!(warm_start_holds(0.05, 0.05, 0.1));
+        assert!(warm_start_holds(0.055, 0.05, 0.1));
+        assert!(!warm_start_holds(0.056, 0.05, 0.1));
+        assert!(!warm_start_holds(f32::NAN, 0.05, 0.1));
+        assert!(!warm_start_holds(f32::INFINITY, f32::INFINITY, 0.1));
     }
 }
