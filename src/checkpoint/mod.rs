@@ -5,10 +5,12 @@
 //! with its manifest, generations and CRC-32 checks ([`write_checkpoint`], [`read_checkpoint`]).
 //! What the state holds is decided by the streaming mapper (`catmap-systems`).
 
+mod config;
 mod fields;
 mod files;
 mod tensor_store;
 
+pub use config::CheckpointConfig;
 pub use fields::{
     CategoryFieldHeader, OccupancyFieldHeader, load_category_field, load_occupancy_field, store_category_field,
     store_occupancy_field,

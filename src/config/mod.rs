@@ -5,17 +5,17 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-mod category_fields;
-mod checkpoint;
-mod fields;
-mod meshes;
 mod phases;
+mod rerun;
 
-pub use category_fields::{CategoryFieldConfig, CategoryRayBudget};
-pub use checkpoint::CheckpointConfig;
-pub use fields::FieldConfig;
-pub use meshes::MeshConfig;
+pub use crate::checkpoint::CheckpointConfig;
+pub use crate::dataset::config::{DatasetConfig, StreamConfig};
+pub use crate::field::FieldConfig;
+pub use crate::field::category::{CategoryFieldConfig, CategoryRayBudget};
+pub use crate::meshing::MeshConfig;
+pub use crate::objects::config::{KeyframeConfig, ObjectConfig};
 pub use phases::{AfterStream, FirstPhase};
+pub use rerun::RerunConfig;
 
 use crate::error::{CatmapError, Result};
 
@@ -47,143 +47,6 @@ pub struct MapperConfig {
     pub rerun: RerunConfig,
     /// Checkpoints for `catmap run --resume`.
     pub checkpoint: CheckpointConfig,
-}
-
-/// Reader thread and channel.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct StreamConfig {
-    /// Capacity of the bounded channel between the reader thread and the mapper, in frames.
-    pub channel_capacity: usize,
-    /// Most frames the ingest system takes from the channel per tick.
-    pub frames_per_tick: usize,
-    /// Use every `stride`-th frame of the dataset (1 = all).
-    pub stride: usize,
-    /// Stop after this many frames (after striding); `None` = all.
-    pub max_frames: Option<usize>,
-}
-
-impl Default for StreamConfig {
-    fn default() -> Self {
-        Self {
-            channel_capacity: 8,
-            frames_per_tick: 1,
-            stride: 1,
-            max_frames: None,
-        }
-    }
-}
-
-/// Interpretation of dataset images.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct DatasetConfig {
-    /// Raw depth units per metre (Replica and ScanNet: millimetres, 1000).
-    pub depth_scale: f32,
-    /// Depth beyond this is treated as invalid, metres.
-    pub max_depth_m: f32,
-}
-
-impl Default for DatasetConfig {
-    fn default() -> Self {
-        Self {
-            depth_scale: 1000.0,
-            max_depth_m: 8.0,
-        }
-    }
-}
-
-/// Object entities built from instance masks.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ObjectConfig {
-    /// An instance whose 2D box is at most this many pixels wide or high is ignored in that frame.
-    pub min_box_side_px: u32,
-    /// Growth of the 2D box: each side moves out by half this fraction of the box size (0.2 = 20 % larger).
-    pub box_enlargement: f32,
-    /// Edge of the voxel grid that accumulates each object's observed point cloud, metres.
-    pub cloud_voxel_m: f32,
-    /// Smallest extent of an object's oriented box, metres.
-    pub min_extent_m: f32,
-    /// The oriented box is recomputed when the cloud has grown by more than this fraction since
-    /// the last computation (0.1 = 10 %).
-    pub bounds_refresh_growth: f32,
-    /// Voxel edge used to thin the cloud before fitting the oriented box, metres.
-    pub bounds_voxel_m: f32,
-    /// Only every n-th background pixel in each direction feeds the background cloud.
-    pub background_pixel_stride: u32,
-    /// Voxel edge of the background's observed cloud, metres.
-    pub background_voxel_m: f32,
-}
-
-impl Default for ObjectConfig {
-    fn default() -> Self {
-        Self {
-            min_box_side_px: 10,
-            box_enlargement: 0.2,
-            cloud_voxel_m: 0.01,
-            min_extent_m: 0.10,
-            bounds_refresh_growth: 0.1,
-            bounds_voxel_m: 0.02,
-            background_pixel_stride: 4,
-            background_voxel_m: 0.05,
-        }
-    }
-}
-
-/// Per-object keyframe windows (vMAP's policy).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct KeyframeConfig {
-    /// Frames kept per object, including the live one. Must be >= 3.
-    pub capacity: usize,
-    /// An object's n-th visible frame is a keyframe when n is a multiple of this.
-    pub object_stride: u32,
-    /// The same for the background.
-    pub background_stride: u32,
-}
-
-impl Default for KeyframeConfig {
-    fn default() -> Self {
-        Self {
-            capacity: 20,
-            object_stride: 25,
-            background_stride: 50,
-        }
-    }
-}
-
-/// Rerun logging.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct RerunConfig {
-    /// Images are logged at 1/`image_downscale` of their size (1 = full size).
-    pub image_downscale: u32,
-    /// Log images every this many frames (points and boxes are logged every frame).
-    pub image_every: u32,
-    /// JPEG quality of logged colour images, 1–100.
-    pub jpeg_quality: u8,
-    /// At most this many points per object cloud are logged (evenly thinned).
-    pub max_points_per_object: usize,
-    /// An object's cloud is logged again once it has grown by this fraction (0.25 = 25 %).
-    pub cloud_log_growth: f32,
-    /// A saved .rrd ends with Rerun's chunk index (its footer) only for streams of at most this
-    /// many frames: the index is held in memory until the file closes (≈ 15 MiB per 1 000 frames),
-    /// so longer streams are saved without it to keep memory flat (0 = never write it).
-    pub rrd_footer_max_frames: u64,
-}
-
-impl Default for RerunConfig {
-    fn default() -> Self {
-        Self {
-            image_downscale: 2,
-            image_every: 1,
-            jpeg_quality: 80,
-            max_points_per_object: 8_000,
-            cloud_log_growth: 0.25,
-            rrd_footer_max_frames: 2_000,
-        }
-    }
 }
 
 impl MapperConfig {

@@ -3,6 +3,7 @@
 
 pub mod camera_spec;
 pub mod classes;
+pub mod config;
 pub mod decode_guard;
 pub mod images;
 pub mod replica;

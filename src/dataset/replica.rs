@@ -17,12 +17,12 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Isometry3;
 
-use crate::config::DatasetConfig;
 use crate::dataset::FrameSource;
 use crate::dataset::camera_spec::{
     intrinsics_problem, parse_numbers, read_intrinsics_json, world_from_camera_from_rows,
 };
 use crate::dataset::classes::REPLICA_BACKGROUND;
+use crate::dataset::config::DatasetConfig;
 use crate::dataset::images::{
     Image, check_depth_options, depth_to_metres_in_place, numbered_files, read_grey, read_grey_as, read_rgb,
     require_size, size_text,

@@ -26,6 +26,7 @@
 mod adamw;
 mod batch;
 pub mod category;
+mod config;
 mod dense;
 mod directions;
 mod encoding;
@@ -46,6 +47,7 @@ mod tensors;
 pub use adamw::{AdamWConfig, AdamWState};
 pub use batch::{CHUNK_SAMPLES, FieldBatch};
 pub use category::{CategoryBatch, CategoryField, CategoryGradients, CategoryLosses, CategorySamples};
+pub use config::FieldConfig;
 pub use directions::{NUM_DIRECTIONS, icosphere_directions};
 pub use encoding::{COL_DIMS, EMB_DIMS, GEO_DIMS, NUM_BANDS, SIN_DIMS};
 pub use layout::{InitKind, ParamLayout, TensorSpec};

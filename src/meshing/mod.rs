@@ -24,12 +24,14 @@
 
 pub mod case_table;
 pub mod coarse_to_fine;
+mod config;
 mod field_mesh;
 mod map_meshes;
 mod marching_cubes;
 pub mod object_grid;
 pub mod sample_grid;
 
+pub use config::MeshConfig;
 pub use field_mesh::{mesh_category_member, mesh_occupancy_field};
 pub use map_meshes::MapMeshes;
 pub use marching_cubes::{IsoSurfaceExtractor, marching_cubes};

@@ -4,8 +4,8 @@
 
 use std::collections::BTreeMap;
 
-use crate::config::ObjectConfig;
 use crate::ids::{ClassId, ObjectId};
+use crate::objects::config::ObjectConfig;
 use crate::sensor::frame::{InstanceLabel, RgbdFrame};
 use crate::sensor::pixel_box::PixelBox;
 

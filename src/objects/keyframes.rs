@@ -10,8 +10,8 @@
 
 use rand::{Rng, RngExt};
 
-use crate::config::KeyframeConfig;
 use crate::ids::FrameIndex;
+use crate::objects::config::KeyframeConfig;
 
 /// Which keyframe stride applies: objects and the background differ.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1,8 +1,8 @@
 //! When and how an object's oriented box is (re)fitted from its observed cloud.
 
-use crate::config::ObjectConfig;
 use crate::error::{CatmapError, Result};
 use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box};
+use crate::objects::config::ObjectConfig;
 use crate::objects::observed_cloud::{ObservedCloud, voxel_downsample};
 
 /// Fewest cloud voxels an object needs before it gets a box.

@@ -4,6 +4,7 @@
 
 pub mod config;
 pub mod facts;
+pub mod field_progress;
 pub mod phase_end;
 pub mod plateau;
 pub mod scheduler;
@@ -13,6 +14,7 @@ pub use facts::{
     FieldFacts, FieldKey, FieldRole, LastSeen, MeshSource, Sighting, StreamPhase, category_field_facts,
     object_field_facts,
 };
+pub use field_progress::{FieldProgress, FieldState};
 pub use phase_end::PhaseEnd;
 pub use plateau::{LossWindow, PlateauConfig};
-pub use scheduler::{BatchPlan, FieldProgress, FieldState, SchedulePolicy, StepScheduler};
+pub use scheduler::{BatchPlan, SchedulePolicy, StepScheduler};

@@ -18,8 +18,9 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use super::facts::{FieldFacts, FieldKey, FieldRole, Sighting, StreamPhase};
-use super::plateau::{LossWindow, PlateauConfig};
+use super::facts::{FieldFacts, FieldKey};
+use super::field_progress::{FieldProgress, FieldState};
+use super::plateau::PlateauConfig;
 
 /// How steps are given out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -29,47 +30,6 @@ pub enum SchedulePolicy {
     Fast,
     /// The paper's fixed protocol: every field on every step.
     Paper,
-}
-
-/// Why a field is (not) training, as of the latest plan.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum FieldState {
-    /// It takes steps.
-    Training,
-    /// Its loss stopped falling.
-    Converged,
-    /// A supporting member's field between keyframes.
-    Waiting,
-    /// Frozen.
-    Frozen,
-}
-
-/// What the scheduler knows of one field.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FieldProgress {
-    /// Steps it has taken.
-    pub steps: u64,
-    /// Its state after the latest plan.
-    pub state: FieldState,
-    /// Steps it had taken when it last converged.
-    pub converged_at: Option<u64>,
-    /// How many times its learning rate has been decayed since its latest new keyframe.
-    #[serde(default)]
-    pub decays: u32,
-    window: LossWindow,
-}
-
-impl Default for FieldProgress {
-    fn default() -> Self {
-        Self {
-            steps: 0,
-            state: FieldState::Training,
-            converged_at: None,
-            decays: 0,
-            window: LossWindow::default(),
-        }
-    }
 }
 
 /// The fields of a batch that take the next steps, ascending by batch index.
@@ -99,7 +59,7 @@ impl StepScheduler {
                 let progress = self.fields.entry(f.key).or_default();
                 let state = match policy {
                     SchedulePolicy::Paper => FieldState::Training,
-                    SchedulePolicy::Fast => next_state(progress, f, plateau),
+                    SchedulePolicy::Fast => progress.advance(f, plateau),
                 };
                 if state == FieldState::Converged && progress.state != FieldState::Converged {
                     progress.converged_at = Some(progress.steps);
@@ -145,7 +105,7 @@ impl StepScheduler {
     pub fn record(&mut self, key: FieldKey, loss: f32, plateau: &PlateauConfig) {
         let progress = self.fields.entry(key).or_default();
         progress.steps += 1;
-        progress.window.push(loss, plateau);
+        progress.record(loss, plateau);
     }
 
     /// The factor of `key`'s learning rate for its next steps (1 until its loss plateaus after
@@ -167,36 +127,11 @@ impl StepScheduler {
     }
 }
 
-/// The state of a field under the fast policy (a new keyframe also restarts its window).
-/// After the stream, a plateau first decays the learning rate (up to
-/// `plateau.learning_rate_decays` times, each restarting the window); a new keyframe restores it.
-fn next_state(progress: &mut FieldProgress, facts: &FieldFacts, plateau: &PlateauConfig) -> FieldState {
-    if facts.sighting == Sighting::NewKeyframe {
-        progress.window.clear();
-        progress.decays = 0;
-    }
-    match (facts.role, facts.sighting) {
-        (FieldRole::Frozen, _) => FieldState::Frozen,
-        (FieldRole::Supporting, Sighting::NewKeyframe) => FieldState::Training,
-        (FieldRole::Supporting, _) => FieldState::Waiting,
-        (FieldRole::Learning, Sighting::Seen | Sighting::NewKeyframe) => FieldState::Training,
-        (FieldRole::Learning, Sighting::Unseen) if progress.window.has_plateaued(plateau) => {
-            if facts.phase == StreamPhase::Ended && progress.decays < plateau.learning_rate_decays {
-                progress.decays += 1;
-                progress.window.clear();
-                FieldState::Training
-            } else {
-                FieldState::Converged
-            }
-        }
-        (FieldRole::Learning, Sighting::Unseen) => FieldState::Training,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::ids::ObjectId;
+    use crate::training::facts::{FieldRole, Sighting, StreamPhase};
 
     const PLATEAU: PlateauConfig = PlateauConfig {
         window_steps: 3,

@@ -40,6 +40,7 @@
 //! | `reference` | the same model in candle autograd |
 
 mod batch;
+mod config;
 mod member_rays;
 mod model;
 mod net;
@@ -48,6 +49,7 @@ mod tensors;
 mod train;
 
 pub use batch::{CategoryBatch, CategoryGradients};
+pub use config::{CategoryFieldConfig, CategoryRayBudget};
 pub use model::CategoryField;
 
 use super::loss::FieldLosses;

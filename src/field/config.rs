@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::field::{AdamWConfig, RaySamplerConfig};
+use super::{AdamWConfig, RaySamplerConfig};
 
 /// Per-object (vMAP-style) fields and how they train.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::meshing::ObjectMeshConfig;
+use super::ObjectMeshConfig;
 
 /// When and how finely meshes are extracted.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -1,0 +1,64 @@
+//! [`ObjectConfig`] and [`KeyframeConfig`]: how objects are built from instance masks, and their
+//! keyframe windows.
+
+use serde::{Deserialize, Serialize};
+
+/// Object entities built from instance masks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ObjectConfig {
+    /// An instance whose 2D box is at most this many pixels wide or high is ignored in that frame.
+    pub min_box_side_px: u32,
+    /// Growth of the 2D box: each side moves out by half this fraction of the box size (0.2 = 20 % larger).
+    pub box_enlargement: f32,
+    /// Edge of the voxel grid that accumulates each object's observed point cloud, metres.
+    pub cloud_voxel_m: f32,
+    /// Smallest extent of an object's oriented box, metres.
+    pub min_extent_m: f32,
+    /// The oriented box is recomputed when the cloud has grown by more than this fraction since
+    /// the last computation (0.1 = 10 %).
+    pub bounds_refresh_growth: f32,
+    /// Voxel edge used to thin the cloud before fitting the oriented box, metres.
+    pub bounds_voxel_m: f32,
+    /// Only every n-th background pixel in each direction feeds the background cloud.
+    pub background_pixel_stride: u32,
+    /// Voxel edge of the background's observed cloud, metres.
+    pub background_voxel_m: f32,
+}
+
+impl Default for ObjectConfig {
+    fn default() -> Self {
+        Self {
+            min_box_side_px: 10,
+            box_enlargement: 0.2,
+            cloud_voxel_m: 0.01,
+            min_extent_m: 0.10,
+            bounds_refresh_growth: 0.1,
+            bounds_voxel_m: 0.02,
+            background_pixel_stride: 4,
+            background_voxel_m: 0.05,
+        }
+    }
+}
+
+/// Per-object keyframe windows (vMAP's policy).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct KeyframeConfig {
+    /// Frames kept per object, including the live one. Must be >= 3.
+    pub capacity: usize,
+    /// An object's n-th visible frame is a keyframe when n is a multiple of this.
+    pub object_stride: u32,
+    /// The same for the background.
+    pub background_stride: u32,
+}
+
+impl Default for KeyframeConfig {
+    fn default() -> Self {
+        Self {
+            capacity: 20,
+            object_stride: 25,
+            background_stride: 50,
+        }
+    }
+}
