@@ -15,6 +15,7 @@ use catmap::synth::{Design, RegistrationTrial, RegistrationTrialSpec};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+#[expect(clippy::print_stdout, reason = "a benchmark prints its figures")]
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let flag = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1));

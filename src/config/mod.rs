@@ -106,7 +106,7 @@ impl MapperConfig {
         if self.stream.stride == 0 {
             return bad("stream.stride must be at least 1");
         }
-        if !(self.dataset.depth_scale > 0.0) {
+        if self.dataset.depth_scale.is_nan() || self.dataset.depth_scale <= 0.0 {
             return bad("dataset.depth_scale must be positive");
         }
         if self.keyframes.capacity < 3 {

@@ -68,7 +68,19 @@ mod tests {
     use super::*;
     use crate::training::ScheduleConfig;
 
-    fn config(policy: SchedulePolicy, offline: bool, categories: bool) -> MapperConfig {
+    /// How the per-object fields train.
+    enum Protocol {
+        Online,
+        Offline,
+    }
+
+    /// Which fields make the meshes.
+    enum Fields {
+        Category,
+        Instance,
+    }
+
+    fn config(policy: SchedulePolicy, protocol: Protocol, fields: Fields) -> MapperConfig {
         let mut c = MapperConfig {
             schedule: ScheduleConfig {
                 policy,
@@ -77,14 +89,14 @@ mod tests {
             },
             ..MapperConfig::default()
         };
-        c.fields.offline = offline;
-        c.category_fields.enabled = categories;
+        c.fields.offline = matches!(protocol, Protocol::Offline);
+        c.category_fields.enabled = matches!(fields, Fields::Category);
         c
     }
 
     #[test]
     fn the_fast_schedule_online_trains_every_field_in_one_phase() {
-        let phases = config(SchedulePolicy::Fast, false, true).after_stream();
+        let phases = config(SchedulePolicy::Fast, Protocol::Online, Fields::Category).after_stream();
         assert_eq!(
             phases,
             AfterStream {
@@ -94,7 +106,7 @@ mod tests {
                 ends_on_convergence: true,
             }
         );
-        let instance = config(SchedulePolicy::Fast, false, false).after_stream();
+        let instance = config(SchedulePolicy::Fast, Protocol::Online, Fields::Instance).after_stream();
         assert_eq!(
             (instance.first, instance.category_cap),
             (FirstPhase::ObjectFields, None)
@@ -103,7 +115,7 @@ mod tests {
 
     #[test]
     fn the_paper_schedule_and_the_offline_protocol_keep_their_step_counts() {
-        let paper = config(SchedulePolicy::Paper, false, true).after_stream();
+        let paper = config(SchedulePolicy::Paper, Protocol::Online, Fields::Category).after_stream();
         assert_eq!(
             paper,
             AfterStream {
@@ -113,7 +125,7 @@ mod tests {
                 ends_on_convergence: false,
             }
         );
-        let offline = config(SchedulePolicy::Fast, true, true);
+        let offline = config(SchedulePolicy::Fast, Protocol::Offline, Fields::Category);
         assert_eq!(
             offline.training_policy(),
             SchedulePolicy::Paper,

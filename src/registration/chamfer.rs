@@ -21,7 +21,7 @@ pub fn one_way_chamfer(from: &[Point3<f32>], to: &[Point3<f32>]) -> Result<f32> 
 /// objects of different size. Errors when P has no extent.
 pub fn normalised_one_way_chamfer(from: &[Point3<f32>], to: &[Point3<f32>]) -> Result<f32> {
     let scale = half_max_extent(from);
-    if !(scale > 0.0) {
+    if scale.is_nan() || scale <= 0.0 {
         return Err(CatmapError::Degenerate(format!(
             "chamfer query cloud of {} points has no extent",
             from.len()
@@ -44,7 +44,7 @@ pub fn trimmed_normalised_chamfer(from: &[Point3<f32>], index: &PointIndex, keep
     }
     let sum: f64 = d[..keep].iter().map(|&x| f64::from(x)).sum();
     let scale = half_max_extent(from);
-    if !(scale > 0.0) {
+    if scale.is_nan() || scale <= 0.0 {
         return f32::INFINITY;
     }
     (sum / keep as f64) as f32 / scale

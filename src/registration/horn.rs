@@ -20,7 +20,7 @@ pub fn weighted_rotation(a: &[Vector3<f64>], b: &[Vector3<f64>], weights: &[f64]
 /// (R*, t*) = argmin Σ w_i |b_i − (R a_i + t)|². Identity when the weights vanish.
 pub fn weighted_rigid(a: &[Vector3<f64>], b: &[Vector3<f64>], weights: &[f64]) -> (Rotation3<f64>, Vector3<f64>) {
     let total: f64 = weights.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return (Rotation3::identity(), Vector3::zeros());
     }
     let centroid = |v: &[Vector3<f64>]| v.iter().zip(weights).map(|(x, &w)| w * x).sum::<Vector3<f64>>() / total;
@@ -41,7 +41,7 @@ pub fn rotation_angle_between(a: &Rotation3<f64>, b: &Rotation3<f64>) -> f64 {
 }
 
 fn rotation_from_cross_covariance(h: &Matrix3<f64>) -> Rotation3<f64> {
-    if !(h.norm() > 0.0) || !h.iter().all(|x| x.is_finite()) {
+    if !h.iter().all(|x| x.is_finite()) || h.norm() <= 0.0 {
         return Rotation3::identity();
     }
     let svd = h.svd(true, true);

@@ -218,7 +218,7 @@ impl BitGraph {
         let n = self.core.len();
         let mut best = vec![n - 1];
         for v in (0..n).rev() {
-            if self.core[v] as usize + 1 <= best.len() {
+            if (self.core[v] as usize) < best.len() {
                 continue;
             }
             let mut candidates = self.row(v).to_vec();
@@ -321,7 +321,7 @@ fn and_assign(set: &mut [u64], other: &[u64]) {
 fn clear_below(set: &mut [u64], first: usize) {
     let word = (first / 64).min(set.len());
     set[..word].iter_mut().for_each(|w| *w = 0);
-    if word < set.len() && first % 64 != 0 {
+    if word < set.len() && !first.is_multiple_of(64) {
         set[word] &= !0 << (first % 64);
     }
 }

@@ -380,10 +380,10 @@ impl Mapper {
     /// Ends the run: flushes the recording and returns the final map.
     pub fn finish(mut self) -> MapSnapshot {
         let snapshot = self.snapshot();
-        if let Some(rerun) = self.world.get_resource::<Rerun>() {
-            if let Err(e) = rerun.0.flush_blocking() {
-                tracing::warn!(error = %e, "flushing the Rerun recording failed");
-            }
+        if let Some(rerun) = self.world.get_resource::<Rerun>()
+            && let Err(e) = rerun.0.flush_blocking()
+        {
+            tracing::warn!(error = %e, "flushing the Rerun recording failed");
         }
         snapshot
     }

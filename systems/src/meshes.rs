@@ -50,8 +50,15 @@ pub fn extract_preview_meshes(
     *last = progress.last_frame;
     let _timer = times.start("meshes");
     let config = settings.0.meshes.preview();
-    let meshes = mesh_fields(&fields, &owners, &config, &config, false);
-    insert_meshes(meshes, &category_fields, &members, &config, false, &mut commands);
+    let meshes = mesh_fields(&fields, &owners, &config, &config, MeshPass::Preview);
+    insert_meshes(
+        meshes,
+        &category_fields,
+        &members,
+        &config,
+        MeshPass::Preview,
+        &mut commands,
+    );
 }
 
 /// Meshes every field at final resolution (`meshes.object`; the background at
@@ -67,8 +74,24 @@ pub fn extract_final_meshes(
 ) {
     let _timer = times.start("meshes");
     let cfg = &settings.0.meshes;
-    let meshes = mesh_fields(&fields, &owners, &cfg.object, &cfg.background(), true);
-    insert_meshes(meshes, &category_fields, &members, &cfg.object, true, &mut commands);
+    let meshes = mesh_fields(&fields, &owners, &cfg.object, &cfg.background(), MeshPass::Final);
+    insert_meshes(
+        meshes,
+        &category_fields,
+        &members,
+        &cfg.object,
+        MeshPass::Final,
+        &mut commands,
+    );
+}
+
+/// Which meshes a meshing pass makes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum MeshPass {
+    /// Object fields at the preview spacing, while the stream runs (no background).
+    Preview,
+    /// Every field, the background included, at final resolution.
+    Final,
 }
 
 /// Inserts `meshes` as the owners' [`FieldMesh`]es, the category members' replaced by the mesh
@@ -78,7 +101,7 @@ fn insert_meshes(
     category_fields: &CategoryFields,
     members: &Query<(Entity, &Object, &CategorySlot)>,
     config: &ObjectMeshConfig,
-    is_final: bool,
+    pass: MeshPass,
     commands: &mut Commands,
 ) {
     let from_categories = mesh_category_members(category_fields, members, config);
@@ -91,7 +114,7 @@ fn insert_meshes(
         commands.entity(entity).insert(FieldMesh {
             mesh,
             at_step,
-            is_final,
+            is_final: pass == MeshPass::Final,
             from_category,
         });
     }
@@ -125,12 +148,12 @@ fn mesh_fields(
     owners: &Meshable,
     object_config: &ObjectMeshConfig,
     background_config: &ObjectMeshConfig,
-    with_background: bool,
+    pass: MeshPass,
 ) -> Vec<(Entity, TriangleMesh, u64)> {
     let mut work: Vec<_> = owners
         .iter()
         .filter(|(_, _, is_background, member, _, loss, ..)| {
-            loss.steps > 0 && !member && (with_background || !is_background)
+            loss.steps > 0 && !member && (pass == MeshPass::Final || !is_background)
         })
         .collect();
     work.sort_by_key(|(_, object, ..)| object.map(|o| o.id));
