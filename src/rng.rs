@@ -3,7 +3,7 @@
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::ids::ObjectId;
+use crate::ids::{ClassId, ObjectId};
 
 /// Who owns a random stream. Each owner gets an independent ChaCha stream of the run's seed,
 /// so adding an object never changes another object's draws.
@@ -43,6 +43,13 @@ pub fn seeded_rng(seed: u64, stream: RngStream) -> ChaCha8Rng {
     rng
 }
 
+/// The seed of class `class`'s registration in a run seeded with `seed`: its representative
+/// choice and each pair's search draw from generators seeded with it (see
+/// `categories::class_registration`).
+pub fn class_registration_seed(seed: u64, class: ClassId) -> u64 {
+    seed ^ (u64::from(class.0) << 32)
+}
+
 /// One N(0, 1) draw in double precision (Box–Muller; consumes two `f64` draws).
 pub fn standard_normal_f64<R: rand::Rng + ?Sized>(rng: &mut R) -> f64 {
     let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
@@ -70,5 +77,15 @@ mod tests {
         let c: u64 = seeded_rng(5, RngStream::Object(ObjectId(4))).random();
         assert_eq!(a, b);
         assert_ne!(a, c);
+    }
+
+    #[test]
+    fn each_class_registers_from_its_own_seed() {
+        assert_eq!(class_registration_seed(5, ClassId(0)), 5);
+        assert_eq!(class_registration_seed(5, ClassId(3)), 5 ^ (3 << 32));
+        assert_ne!(
+            class_registration_seed(5, ClassId(3)),
+            class_registration_seed(5, ClassId(4))
+        );
     }
 }

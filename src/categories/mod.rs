@@ -3,6 +3,7 @@
 //! normalised frames (NOCS), and which category field each subcategory gets.
 
 pub mod class_registration;
+pub mod class_update;
 pub mod field_plan;
 pub mod nocs;
 pub mod subcategories;

@@ -57,7 +57,7 @@ pub fn category_records(world: &mut World) -> Vec<ClassRecord> {
     let reliable: BTreeMap<ObjectId, usize> = world
         .query::<(&Object, &Reliability)>()
         .iter(world)
-        .map(|(o, r)| (o.id, r.sphere.reliable_rays))
+        .map(|(o, r)| (o.id, r.0.sphere.reliable_rays))
         .collect();
     let mut records: Vec<ClassRecord> = world
         .query::<(&Category, Option<&Subcategories>)>()

@@ -139,12 +139,7 @@ pub struct FieldMesh {
 /// The object's uncertainty sphere as its class's latest registration used it, and what it was
 /// evaluated on (it is evaluated again only after material growth).
 #[derive(Component, Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Reliability {
-    /// The evaluated sphere.
-    pub sphere: catmap::categories::uncertainty::ObjectReliability,
-    /// The cloud and field it was evaluated on.
-    pub stamp: catmap::categories::uncertainty::UncertaintyStamp,
-}
+pub struct Reliability(pub catmap::categories::class_update::MemberReliability);
 
 /// The object's place in its class: subcategory, representative, alignment and NOCS frame.
 #[derive(Component, Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -169,6 +164,16 @@ pub struct Subcategories {
     /// Every pair the registration answered (a pair on unchanged clouds is not searched again).
     #[serde(default)]
     pub pairs: catmap::categories::class_registration::PairCache,
+}
+
+impl Subcategories {
+    /// The registration it records (what the next one starts from).
+    pub fn registration(&self) -> catmap::categories::class_registration::ClassRegistration {
+        catmap::categories::class_registration::ClassRegistration {
+            groups: self.groups.clone(),
+            pairs: self.pairs.clone(),
+        }
+    }
 }
 
 /// A member's place in a category field.

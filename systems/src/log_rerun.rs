@@ -312,7 +312,7 @@ pub fn log_memberships(
         let path = format!("{}/aligned_box", paths::object(object.id));
         warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
         if let Some(reliability) = reliability {
-            let sphere = &reliability.sphere;
+            let sphere = &reliability.0.sphere;
             let positions: Vec<[f32; 3]> = sphere
                 .sphere_points
                 .iter()
