@@ -40,3 +40,26 @@ pub use config::MapperConfig;
 pub use error::{CatmapError, Result};
 pub use ids::{ClassId, FrameIndex, ObjectId};
 pub use sensor::frame::{CameraIntrinsics, InstanceLabel, InstanceMask, RgbdFrame, SharedFrame};
+
+#[cfg(test)]
+mod tests {
+    /// docs/ARCHITECTURE.md names every top-level module of `src/` (as `src/name/` or `name`).
+    #[test]
+    fn the_architecture_page_names_every_top_level_module() {
+        let page = include_str!("../docs/ARCHITECTURE.md");
+        let modules: Vec<&str> = include_str!("lib.rs")
+            .lines()
+            .filter_map(|line| line.strip_prefix("pub mod ")?.strip_suffix(';'))
+            .collect();
+        assert!(modules.len() > 10, "lib.rs lists its modules: {modules:?}");
+        let missing: Vec<&&str> = modules
+            .iter()
+            .filter(|m| {
+                !page.contains(&format!("src/{m}/"))
+                    && !page.contains(&format!(" {m} "))
+                    && !page.contains(&format!(" {m}\n"))
+            })
+            .collect();
+        assert!(missing.is_empty(), "docs/ARCHITECTURE.md does not name {missing:?}");
+    }
+}
