@@ -11,6 +11,7 @@
 //! cargo run --release --example bench_ingest -- --long-frames 10000
 //! ```
 
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
@@ -21,7 +22,7 @@ use catmap::dataset::stream::{FrameStream, stream_positions};
 use catmap::process_memory::{peak_resident_mib, resident_mib};
 use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
 use catmap::{CameraIntrinsics, MapperConfig, RgbdFrame};
-use catmap_systems::Mapper;
+use catmap_systems::{Mapper, RunPhase};
 use clap::Parser;
 
 /// Arguments.
@@ -98,22 +99,23 @@ fn main() -> anyhow::Result<()> {
         config.stream.channel_capacity,
     );
     let mut mapper = Mapper::with_inbox(config.clone(), stream.receiver.clone())?;
-    mapper.run_to_end(|_| {});
+    mapper.run(|_| ControlFlow::Continue(()));
     stream.join();
     let seconds = started.elapsed().as_secs_f64();
     let stats = mapper.stream_stats().unwrap_or_default();
-    let map = mapper.finish_keeping_times();
+    let stages = mapper.stage_seconds();
+    let map = mapper.finish();
     say(&format!(
         "\nthroughput: {frames} frames of {w}×{h} in {seconds:.2} s = {:.1} frames/s ({} objects)",
         frames as f64 / seconds,
-        map.0.objects.len()
+        map.objects.len()
     ));
     say(&format!(
         "  reader thread: decode {:.2} s, blocked on the full channel {:.2} s",
         stats.decode_time.as_secs_f64(),
         stats.blocked_time.as_secs_f64()
     ));
-    for (stage, secs) in &map.1 {
+    for (stage, secs) in &stages {
         say(&format!(
             "  {stage:<8} {secs:>7.2} s  ({:.2} ms/frame)",
             secs * 1000.0 / frames as f64
@@ -140,13 +142,15 @@ fn main() -> anyhow::Result<()> {
     let started = Instant::now();
     let mut next_report = args.rss_every;
     let mut samples = Vec::new();
-    mapper.run_to_end(|n| {
-        if n >= next_report {
+    mapper.run(|progress| {
+        let n = progress.done;
+        if progress.phase == RunPhase::Stream && n >= next_report {
             let rss = resident_mib().unwrap_or(f64::NAN);
             samples.push((n, rss));
             say(&format!("  {n:>6}   {rss:>8.1}"));
             next_report += args.rss_every;
         }
+        ControlFlow::Continue(())
     });
     stream.join();
     let stats = mapper.stream_stats().unwrap_or_default();

@@ -241,7 +241,8 @@ fn run(args: &Args) -> anyhow::Result<()> {
     let seconds = started.elapsed().as_secs_f64();
     let stats = mapper.stream_stats().unwrap_or_default();
     let steps = mapper.training_steps();
-    let (map, stages) = mapper.finish_keeping_times();
+    let stages = mapper.stage_seconds();
+    let map = mapper.finish();
     stream.join();
     say(&format!(
         "\n{} frames in {seconds:.1} s ({:.1} frames/s), {steps} training steps, {} objects; peak RSS {:.1} MiB",

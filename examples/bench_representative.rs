@@ -12,6 +12,7 @@
 //! ```
 
 use std::collections::BTreeMap;
+use std::ops::ControlFlow;
 
 use catmap::categories::uncertainty::{RepresentativeChoice, choose_representative};
 use catmap::config::FieldConfig;
@@ -74,7 +75,7 @@ fn check_scene(seed: u64, args: &Args) -> anyhow::Result<(usize, usize)> {
     }
     mapper.end_stream();
     mapper.step();
-    mapper.train_after_stream(|_, _| {});
+    mapper.run(|_| ControlFlow::Continue(()));
     let observed = scene.observed_surface_fraction();
     let (mut above, mut groups) = (0, 0);
     for class in mapper.category_records() {

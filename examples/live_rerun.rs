@@ -6,6 +6,7 @@
 //! cargo run --release --example live_rerun  # or: -- --addr rerun+http://127.0.0.1:9876/proxy
 //! ```
 
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -60,7 +61,10 @@ fn run(rec: &rerun::RecordingStream, args: &Args) -> anyhow::Result<()> {
     let stream = FrameStream::spawn(scene, positions, config.stream.channel_capacity);
     let mut mapper = Mapper::with_inbox(config, stream.receiver.clone())?;
     mapper.set_recording(rec.clone());
-    mapper.run_to_end(|frames| tracing::debug!(frames, "mapped"));
+    mapper.run(|progress| {
+        tracing::debug!(phase = ?progress.phase, done = progress.done, "mapped");
+        ControlFlow::Continue(())
+    });
     stream.join();
     let map = mapper.finish();
     tracing::info!(

@@ -10,9 +10,10 @@ use catmap::dataset::FrameSource;
 use catmap::dataset::stream::StreamMessage;
 use catmap::meshing::MapMeshes;
 use catmap::synth::{Preset, SyntheticScene};
+use catmap::training::SchedulePolicy;
 use catmap::{MapperConfig, RgbdFrame};
-use catmap_systems::Mapper;
-use crossbeam_channel::{Sender, bounded};
+use catmap_systems::{Mapper, RunOutcome, RunPhase, SavedMapper};
+use crossbeam_channel::{Receiver, Sender, bounded};
 
 /// Where a run is interrupted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,6 +36,9 @@ fn config() -> MapperConfig {
         },
         ..MapperConfig::default()
     };
+    // The paper's schedule has a category phase of its own (the fast one trains the category
+    // fields in the phase before), so that the run can stop in each phase.
+    config.schedule.policy = SchedulePolicy::Paper;
     config.categories.min_field_steps = 20;
     config.category_fields.enabled = true;
     config.category_fields.iterations = 100;
@@ -43,62 +47,59 @@ fn config() -> MapperConfig {
     config
 }
 
-/// A mapper fed through a channel the test holds (like a reader thread's).
-fn fed(mapper: &mut Mapper) -> Sender<StreamMessage> {
-    let (sender, receiver) = bounded(4);
-    mapper.attach_inbox(receiver);
-    sender
-}
-
 fn push(mapper: &mut Mapper, sender: &Sender<StreamMessage>, frame: RgbdFrame) {
     sender.send(StreamMessage::Frame(Arc::new(frame))).expect("inbox open");
     mapper.step();
 }
 
-/// Saves `mapper` to a fresh folder and returns the mapper restored from it.
-fn save_and_restore(mut mapper: Mapper) -> Mapper {
+/// Saves `mapper` to a fresh folder and returns the mapper restored from it, fed by `inbox`.
+fn save_and_restore(mut mapper: Mapper, inbox: Receiver<StreamMessage>) -> Mapper {
     let dir = tempfile::tempdir().expect("temp dir");
     mapper
         .save_checkpoint(dir.path(), "test", "{\"caller\": 1}".to_owned())
         .expect("checkpoint written");
     drop(mapper);
-    let (restored, extra) = Mapper::resume(dir.path(), None).expect("checkpoint restores");
-    assert_eq!(extra, "{\"caller\": 1}");
-    restored
+    let saved = SavedMapper::load(dir.path()).expect("checkpoint reads");
+    assert_eq!(saved.extra(), "{\"caller\": 1}");
+    Mapper::from_checkpoint(saved, inbox).expect("checkpoint restores")
 }
 
-/// Maps every other frame of `scene`, stopping (save, drop, restore) at each of `stops`.
+/// The stop in `phase` after its first chunk, if any.
+fn stop_in(phase: RunPhase) -> Option<Stop> {
+    match phase {
+        RunPhase::Stream => None,
+        RunPhase::AfterStream => Some(Stop::AfterStream),
+        RunPhase::Categories => Some(Stop::Categories),
+    }
+}
+
+/// Maps every other frame of `scene` through a channel the test holds (like a reader thread's),
+/// stopping (save, drop, restore) at each of `stops`.
 fn run(scene: &SyntheticScene, stops: &[Stop]) -> (MapMeshes, String, String) {
-    let mut mapper = Mapper::with_inbox(config(), crossbeam_channel::never()).expect("valid config");
-    let mut sender = fed(&mut mapper);
+    let (mut sender, receiver) = bounded(4);
+    let mut mapper = Mapper::with_inbox(config(), receiver).expect("valid config");
     for (mapped, position) in (0..scene.len()).step_by(2).enumerate() {
         push(&mut mapper, &sender, scene.read_frame(position).expect("frame renders"));
         if stops.contains(&Stop::Frame(mapped + 1)) {
-            mapper = save_and_restore(mapper);
+            let (new_sender, receiver) = bounded(4);
+            mapper = save_and_restore(mapper, receiver);
+            sender = new_sender;
             assert_eq!(mapper.positions_consumed(), mapped + 1, "stream position restored");
-            sender = fed(&mut mapper);
         }
     }
     sender.send(StreamMessage::End(Default::default())).expect("inbox open");
     mapper.step();
     assert!(mapper.stream_ended());
-    let stop_once = |flag: bool| {
-        move |_, _| {
-            if flag {
-                ControlFlow::Break(())
-            } else {
-                ControlFlow::Continue(())
-            }
-        }
-    };
-    if !mapper.train_after_stream_until(stop_once(stops.contains(&Stop::AfterStream))) {
-        mapper = save_and_restore(mapper);
-        assert!(mapper.train_after_stream_until(stop_once(false)));
+    let mut stopped: Vec<Stop> = Vec::new();
+    while let RunOutcome::Paused(at) = mapper.run(|progress| match stop_in(progress.phase) {
+        Some(stop) if stops.contains(&stop) && !stopped.contains(&stop) => ControlFlow::Break(()),
+        _ => ControlFlow::Continue(()),
+    }) {
+        stopped.extend(stop_in(at.phase));
+        mapper = save_and_restore(mapper, crossbeam_channel::never());
     }
-    if !mapper.train_categories_until(stop_once(stops.contains(&Stop::Categories))) {
-        mapper = save_and_restore(mapper);
-        assert!(mapper.train_categories_until(stop_once(false)));
-    }
+    let wanted: Vec<Stop> = stops.iter().copied().filter(|s| !matches!(s, Stop::Frame(_))).collect();
+    assert_eq!(stopped, wanted, "the run paused where asked, once each");
     assert_eq!(mapper.category_field_count(), 1, "the three chairs share a field");
     let categories = serde_json::to_string(&mapper.category_records()).expect("serialises");
     let meshes = mapper.extract_final_meshes();
@@ -132,8 +133,8 @@ fn a_restored_mapper_continues_to_the_same_map_as_an_uninterrupted_one() {
 #[test]
 fn a_damaged_checkpoint_is_refused_with_the_file_named() {
     let scene = SyntheticScene::generate(4, Preset::Small).expect("small scene");
-    let mut mapper = Mapper::with_inbox(config(), crossbeam_channel::never()).expect("valid config");
-    let sender = fed(&mut mapper);
+    let (sender, receiver) = bounded(4);
+    let mut mapper = Mapper::with_inbox(config(), receiver).expect("valid config");
     for position in 0..6 {
         push(&mut mapper, &sender, scene.read_frame(position).expect("frame renders"));
     }
@@ -147,6 +148,6 @@ fn a_damaged_checkpoint_is_refused_with_the_file_named() {
     let middle = bytes.len() / 2;
     bytes[middle] ^= 0x40;
     std::fs::write(&state, bytes).expect("damages");
-    let err = Mapper::resume(dir.path(), None).err().expect("refused").to_string();
+    let err = SavedMapper::load(dir.path()).err().expect("refused").to_string();
     assert!(err.contains(&manifest.state.name) && err.contains("CRC-32"), "{err}");
 }

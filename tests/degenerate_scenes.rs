@@ -3,13 +3,14 @@
 //! objects, frames without depth, a camera that never moves, a stream that stops early.
 
 use catmap::dataset::FrameSource;
+use std::ops::ControlFlow;
 use std::sync::{Arc, Mutex};
 
 use catmap::InstanceLabel;
 use catmap::dataset::stream::FrameStream;
 use catmap::synth::{Preset, SyntheticScene};
 use catmap::{MapperConfig, ObjectId, RgbdFrame};
-use catmap_systems::Mapper;
+use catmap_systems::{Mapper, RunOutcome};
 
 /// Warnings logged (on this thread) while `f` runs, one line each, and `f`'s result.
 fn with_warnings<T>(f: impl FnOnce() -> T) -> (T, String) {
@@ -47,6 +48,8 @@ fn quick_config() -> MapperConfig {
     config.categories.min_field_steps = 4;
     config.category_fields.enabled = true;
     config.category_fields.iterations = 20;
+    // The default (fast) schedule, capped: a short phase after the stream.
+    config.schedule.max_steps_after_stream = 40;
     config.meshes.object.voxel_size_m = 0.03;
     config.meshes.object.max_samples_per_side = 48;
     config.meshes.background_voxel_m = 0.15;
@@ -70,8 +73,7 @@ fn map_frames(frames: Vec<RgbdFrame>) -> Mapper {
     }
     mapper.end_stream();
     mapper.step();
-    mapper.train_after_stream(|_, _| {});
-    mapper.train_categories(|_, _| {});
+    assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
     mapper
 }
 
@@ -320,11 +322,10 @@ fn a_stream_that_stops_mid_frame_keeps_what_was_mapped() {
     };
     let stream = FrameStream::spawn(Arc::new(source), (0..6).collect(), 2);
     let mut mapper = Mapper::with_inbox(quick_config(), stream.receiver.clone()).expect("valid config");
-    let ((), warnings) = with_warnings(|| mapper.run_to_end(|_| {}));
+    let (outcome, warnings) = with_warnings(|| mapper.run(|_| ControlFlow::Continue(())));
     stream.join();
+    assert_eq!(outcome, RunOutcome::Complete);
     assert!(warnings.contains("truncated"), "the error is reported: {warnings}");
-    mapper.train_after_stream(|_, _| {});
-    mapper.train_categories(|_, _| {});
     assert!(
         !mapper.extract_final_meshes().objects.is_empty(),
         "the first frames are meshed"
@@ -360,9 +361,16 @@ impl FrameSource for DyingSource {
 fn a_reader_that_dies_ends_the_stream_instead_of_hanging() {
     let source = DyingSource(SyntheticScene::generate(4, Preset::Small).expect("small scene"));
     let stream = FrameStream::spawn(Arc::new(source), (0..6).collect(), 2);
-    let mut mapper = Mapper::with_inbox(quick_config(), stream.receiver.clone()).expect("valid config");
-    let ((), warnings) = with_warnings(|| mapper.run_to_end(|_| {}));
+    // The stream alone: no fields to train after it.
+    let mut config = MapperConfig {
+        fields: catmap::config::FieldConfig::disabled(),
+        ..quick_config()
+    };
+    config.category_fields.enabled = false;
+    let mut mapper = Mapper::with_inbox(config, stream.receiver.clone()).expect("valid config");
+    let (outcome, warnings) = with_warnings(|| mapper.run(|_| ControlFlow::Continue(())));
     stream.join();
+    assert_eq!(outcome, RunOutcome::Complete);
     assert!(warnings.contains("stopped without its end"), "warned: {warnings}");
     assert_eq!(mapper.finish().frames_ingested, 3, "the frames read before are kept");
 }

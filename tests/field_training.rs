@@ -2,28 +2,37 @@
 //! schedules queue the right number of steps, losses fall, meshes come out in world coordinates
 //! near the ground truth, and the same seed gives bit-identical meshes.
 
+use std::ops::ControlFlow;
+
 use catmap::config::FieldConfig;
 use catmap::dataset::FrameSource;
 use catmap::meshing::MapMeshes;
 use catmap::metrics::{Crop, evaluate_dirs};
 use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
+use catmap::training::SchedulePolicy;
 use catmap::{MapperConfig, ObjectId};
-use catmap_systems::Mapper;
 use catmap_systems::components::{FieldLoss, FieldSlot, Object, ObjectBounds};
+use catmap_systems::{Mapper, RunOutcome, RunPhase};
 
 const SEED: u64 = 11;
 
-/// A cheap training configuration: few steps per frame, coarse meshes.
-fn cheap_config(steps_per_frame: usize) -> MapperConfig {
+/// A cheap training configuration: few steps per frame and `after_stream` steps after the
+/// stream, coarse meshes.
+fn cheap_config(steps_per_frame: usize, after_stream: usize) -> MapperConfig {
     let mut config = MapperConfig {
         seed: SEED,
         fields: FieldConfig {
             steps_per_frame,
+            final_steps: after_stream,
+            offline_iterations: after_stream,
             ..FieldConfig::default()
         },
         ..MapperConfig::default()
     };
     config.category_fields.enabled = false; // the per-object fields alone
+    // Every field trains every step, and the phase after the stream runs its configured steps
+    // (`final_steps` online, `offline_iterations` offline) to the end.
+    config.schedule.policy = SchedulePolicy::Paper;
     config.meshes.preview_every_frames = 0;
     config.meshes.object.voxel_size_m = 0.02;
     config.meshes.background_voxel_m = 0.2;
@@ -53,7 +62,7 @@ fn mean_object_loss(mapper: &mut Mapper) -> f32 {
 #[test]
 fn every_object_with_a_box_trains_online_and_its_loss_falls() {
     let scene = SyntheticScene::generate(SEED, Preset::Small).expect("scene");
-    let mut mapper = Mapper::new(cheap_config(2)).expect("config");
+    let mut mapper = Mapper::new(cheap_config(2, 150)).expect("config");
     stream_scene(&mut mapper, &scene);
     assert_eq!(mapper.training_steps(), 2 * scene.len() as u64, "2 steps per frame");
 
@@ -84,7 +93,7 @@ fn every_object_with_a_box_trains_online_and_its_loss_falls() {
     }
 
     let before = mean_object_loss(&mut mapper);
-    mapper.train(150, 50, |_| {});
+    assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
     let after = mean_object_loss(&mut mapper);
     assert_eq!(mapper.training_steps(), 2 * scene.len() as u64 + 150);
     assert!(after < 0.7 * before, "loss falls with training: {before} → {after}");
@@ -93,27 +102,38 @@ fn every_object_with_a_box_trains_online_and_its_loss_falls() {
 #[test]
 fn the_offline_protocol_trains_only_after_the_stream() {
     let scene = SyntheticScene::generate(SEED, Preset::Small).expect("scene");
-    let mut config = cheap_config(20);
+    let mut config = cheap_config(20, 120);
     config.fields.offline = true;
     let mut mapper = Mapper::new(config).expect("config");
     stream_scene(&mut mapper, &scene);
     assert_eq!(mapper.training_steps(), 0, "no step while streaming");
     let mut reported = Vec::new();
-    mapper.train(120, 50, |done| reported.push(done));
+    let outcome = mapper.run(|progress| {
+        reported.push((progress.phase, progress.done));
+        ControlFlow::Continue(())
+    });
+    assert_eq!(outcome, RunOutcome::Complete);
+    let reported: Vec<u64> = reported
+        .iter()
+        .map(|&(phase, done)| {
+            assert_eq!(phase, RunPhase::AfterStream);
+            done
+        })
+        .collect();
     assert_eq!(reported, [50, 100, 120]);
     assert_eq!(mapper.training_steps(), 120);
 }
 
 /// Streams the small scene, trains offline and returns the final meshes.
-fn final_meshes(offline_steps: u64) -> MapMeshes {
+fn final_meshes(offline_steps: usize) -> MapMeshes {
     let scene = SyntheticScene::generate(SEED, Preset::Small).expect("scene");
-    let mut config = cheap_config(1);
+    let mut config = cheap_config(1, offline_steps);
     config.fields.offline = true;
     // The background field is off by default; these meshes include it.
     config.fields.background_every = 10;
     let mut mapper = Mapper::new(config).expect("config");
     stream_scene(&mut mapper, &scene);
-    mapper.train(offline_steps, 100, |_| {});
+    assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
     mapper.extract_final_meshes()
 }
 

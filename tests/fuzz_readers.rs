@@ -2,8 +2,9 @@
 //! poses, intrinsics (intrinsics.json, `--camera`, ScanNet's intrinsic matrix) and config TOML;
 //! the folder readers are fuzzed in `fuzz_folders.rs`.
 //!
-//! Each target runs for `CATMAP_FUZZ_SECONDS` seconds (default 3) from seed `CATMAP_FUZZ_SEED`
-//! (default 0) and fails on any panic, any error that does not name its file, and any decoded
+//! Each target runs `CATMAP_FUZZ_INPUTS` inputs (a fixed number by default, see `fuzz_support`), or
+//! for `CATMAP_FUZZ_SECONDS` seconds when that is set, from seed `CATMAP_FUZZ_SEED` (default 0),
+//! and fails on any panic, any error that does not name its file, and any decoded
 //! frame that is inconsistent or holds a NaN. A long run, with the per-target report:
 //!
 //! ```text

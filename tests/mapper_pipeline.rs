@@ -2,6 +2,7 @@
 //! at a time, step the schedule, and assert on the mapper's components.
 
 use std::collections::{BTreeMap, BTreeSet};
+use std::ops::ControlFlow;
 use std::sync::Arc;
 
 use catmap::config::KeyframeConfig;
@@ -13,7 +14,7 @@ use catmap::rng::{RngStream, seeded_rng};
 use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
 use catmap::{InstanceLabel, MapperConfig, ObjectId, RgbdFrame};
 use catmap_systems::components::CameraFrame;
-use catmap_systems::{MapSnapshot, Mapper};
+use catmap_systems::{MapSnapshot, Mapper, RunOutcome};
 
 const SEED: u64 = 11;
 
@@ -235,9 +236,27 @@ fn keyframe_windows_follow_the_vmap_policy() {
 
 #[test]
 fn two_runs_with_one_seed_give_identical_maps() {
-    let a = Pipeline::new(Pipeline::default_config()).run_all();
-    let b = Pipeline::new(Pipeline::default_config()).run_all();
+    // A window of six that takes every frame: once full, each new keyframe replaces one of the
+    // four older slots, drawn by the object's seeded generator, so the windows depend on the seed.
+    let config = |seed| MapperConfig {
+        seed,
+        keyframes: KeyframeConfig {
+            capacity: 6,
+            object_stride: 1,
+            background_stride: 1,
+        },
+        ..Pipeline::default_config()
+    };
+    let a = Pipeline::new(config(SEED)).run_all();
+    let b = Pipeline::new(config(SEED)).run_all();
     assert_eq!(a, b, "same scene, config and seed give the same components");
+    let other = Pipeline::new(config(SEED + 1)).run_all();
+    let windows = |m: &MapSnapshot| m.objects.iter().map(|o| o.keyframes.clone()).collect::<Vec<_>>();
+    assert_ne!(
+        windows(&a),
+        windows(&other),
+        "another seed draws other keyframe slots (else the first assertion could not fail)"
+    );
 }
 
 #[test]
@@ -257,7 +276,7 @@ fn a_scene_on_disk_streams_through_the_reader_thread_like_pushed_frames() {
     };
     let stream = FrameStream::spawn(Arc::clone(&source), stream_positions(source.len(), 1, None), 2);
     let mut mapper = Mapper::with_inbox(config, stream.receiver.clone()).expect("valid config");
-    mapper.run_to_end(|_| {});
+    assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
     stream.join();
     let streamed = mapper.finish();
     let pushed = Pipeline::new(Pipeline::default_config()).run_all();

@@ -2,12 +2,13 @@
 //! and every object's cloud, box, field loss and mesh.
 
 use std::collections::BTreeSet;
+use std::ops::ControlFlow;
 
 use catmap::MapperConfig;
 use catmap::dataset::FrameSource;
 use catmap::synth::{Preset, SyntheticScene};
-use catmap_systems::Mapper;
 use catmap_systems::rrd_file::{RrdFooter, save_rrd};
+use catmap_systems::{Mapper, RunOutcome};
 use re_log_encoding::DecoderApp;
 use re_log_types::LogMsg;
 
@@ -57,7 +58,7 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         }
         mapper.end_stream();
         mapper.step();
-        mapper.train_after_stream(|_, _| {});
+        assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
         assert_eq!(mapper.category_field_count(), 1, "one category field");
         let map = mapper.finish();
         assert!(map.objects.len() >= 3, "the small scene maps several objects");

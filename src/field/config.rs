@@ -71,6 +71,12 @@ impl FieldConfig {
         }
     }
 
+    /// Whether the background trains in the step after `steps_done` object steps (every
+    /// `background_every`-th; never when 0).
+    pub fn background_due(&self, steps_done: u64) -> bool {
+        self.background_every > 0 && steps_done.is_multiple_of(self.background_every as u64)
+    }
+
     /// Steps to run once the stream has ended: all of them offline, the refinement online.
     pub fn steps_after_stream(&self) -> usize {
         match (self.enabled, self.offline) {
@@ -104,5 +110,25 @@ impl FieldConfig {
             weight_decay: self.weight_decay,
             ..AdamWConfig::default()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_background_trains_every_nth_step_and_never_at_zero() {
+        let every_three = FieldConfig {
+            background_every: 3,
+            ..FieldConfig::default()
+        };
+        let due: Vec<u64> = (0..8).filter(|&s| every_three.background_due(s)).collect();
+        assert_eq!(due, vec![0, 3, 6]);
+        let never = FieldConfig {
+            background_every: 0,
+            ..FieldConfig::default()
+        };
+        assert!((0..8).all(|s| !never.background_due(s)));
     }
 }

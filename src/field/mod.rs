@@ -55,7 +55,7 @@ pub use loss::{COLOUR_WEIGHT, DEPTH_STD_EPS, FieldLosses, OPACITY_WEIGHT};
 pub use mlp::MlpBatch;
 pub use object_field::{BACKGROUND_HIDDEN, FieldEval, OBJECT_HIDDEN, OccupancyField};
 pub use occupancy::ALPHA_SCALE;
-pub use ray_sampler::{RaySamplerConfig, choose_step_views, sample_training_rays};
+pub use ray_sampler::{RaySamplerConfig, choose_step_views, sample_training_rays, sample_window_rays};
 pub use render::{FREE_EPS, RayRender, RenderGrad, render_ray, render_ray_backward, sigmoid};
 pub use samples::{RaySamples, SampleBatch};
 pub use simd::Backend;

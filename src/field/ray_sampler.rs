@@ -17,6 +17,7 @@ use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
 use super::samples::RaySamples;
+use crate::objects::keyframes::KeyframeWindow;
 use crate::objects::object_view::{ObjectView, PixelState};
 
 /// How one field's rays are drawn for a training step.
@@ -96,6 +97,18 @@ pub fn choose_step_views(len: usize, recent: &[usize], count: usize, rng: &mut i
         chosen.push(pool[rng.random_range(0..pool.len())]);
     }
     chosen
+}
+
+/// The rays of one training step of the field at `field_origin` whose views are `window`'s
+/// keyframes (its newest ones always take part; see [`sample_training_rays`]).
+pub fn sample_window_rays(
+    window: &KeyframeWindow<ObjectView>,
+    field_origin: &Point3<f32>,
+    cfg: &RaySamplerConfig,
+    rng: &mut impl Rng,
+) -> RaySamples {
+    let views: Vec<&ObjectView> = window.slots().iter().map(|s| &s.data).collect();
+    sample_training_rays(&views, window.recent_slots(), field_origin, cfg, rng)
 }
 
 /// Draws one step's rays for one field from its keyframe `views` (`recent` = indices of the two

@@ -125,6 +125,21 @@ pub fn majority_class(votes: &BTreeMap<ClassId, u64>) -> Option<ClassId> {
         .map(|(&class, _)| class)
 }
 
+impl ObjectObservation {
+    /// The class most of this observation's pixels vote for (`None` without pixels).
+    pub fn majority_class(&self) -> Option<ClassId> {
+        majority_class(&self.class_votes.iter().map(|(&c, &n)| (c, u64::from(n))).collect())
+    }
+}
+
+/// Adds this frame's votes `new` to an object's `votes`; returns its class now (the majority).
+pub fn add_class_votes(votes: &mut BTreeMap<ClassId, u64>, new: &BTreeMap<ClassId, u32>) -> Option<ClassId> {
+    for (&class, &n) in new {
+        *votes.entry(class).or_insert(0) += u64::from(n);
+    }
+    majority_class(votes)
+}
+
 #[cfg(test)]
 mod tests {
     use nalgebra::Isometry3;
@@ -194,5 +209,23 @@ mod tests {
         let votes = BTreeMap::from([(ClassId(80), 5), (ClassId(20), 5), (ClassId(18), 2)]);
         assert_eq!(majority_class(&votes), Some(ClassId(20)));
         assert_eq!(majority_class(&BTreeMap::new()), None);
+    }
+
+    #[test]
+    fn votes_add_up_over_frames_and_the_majority_can_change() {
+        let mut votes = BTreeMap::new();
+        let frame = |pairs: &[(u32, u32)]| pairs.iter().map(|&(c, n)| (ClassId(c), n)).collect::<BTreeMap<_, _>>();
+        assert_eq!(add_class_votes(&mut votes, &frame(&[(3, 5), (4, 2)])), Some(ClassId(3)));
+        assert_eq!(
+            add_class_votes(&mut votes, &frame(&[(4, 4)])),
+            Some(ClassId(4)),
+            "6 votes beat 5"
+        );
+        assert_eq!(votes[&ClassId(4)], 6);
+        assert_eq!(
+            add_class_votes(&mut votes, &frame(&[(3, 1)])),
+            Some(ClassId(3)),
+            "a tie goes to the smaller id"
+        );
     }
 }

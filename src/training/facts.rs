@@ -85,6 +85,13 @@ pub enum MeshSource {
     CategoryField,
 }
 
+impl MeshSource {
+    /// Where the mesh of an object comes from, by whether it is a category field's member.
+    pub fn of_category_member(is_member: bool) -> Self {
+        if is_member { Self::CategoryField } else { Self::OwnField }
+    }
+}
+
 /// Whether frames are still streaming in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StreamPhase {

@@ -43,6 +43,17 @@ pub struct BatchPlan {
     pub learning_rate_scales: Vec<f32>,
 }
 
+impl BatchPlan {
+    /// The background field (index 0 of its own batch) at its full rate.
+    pub fn background() -> Self {
+        Self {
+            indices: vec![0],
+            keys: vec![FieldKey::Background],
+            learning_rate_scales: vec![1.0],
+        }
+    }
+}
+
 /// Plans training steps field by field (see the module doc).
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct StepScheduler {
@@ -106,6 +117,13 @@ impl StepScheduler {
         let progress = self.fields.entry(key).or_default();
         progress.steps += 1;
         progress.record(loss, plateau);
+    }
+
+    /// Records one batched step: field `keys[i]` took it with total loss `losses[i]`.
+    pub fn record_step(&mut self, keys: &[FieldKey], losses: &[f32], plateau: &PlateauConfig) {
+        for (&key, &loss) in keys.iter().zip(losses) {
+            self.record(key, loss, plateau);
+        }
     }
 
     /// The factor of `key`'s learning rate for its next steps (1 until its loss plateaus after

@@ -5,7 +5,7 @@
 //! restored by object id so that nothing depends on the order they were spawned in.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use bevy_ecs::prelude::*;
@@ -95,7 +95,7 @@ pub(crate) struct MapperState {
     /// Each category field's creation number (its key in the step scheduler).
     category_ids: Vec<u32>,
     /// What the caller stored beside the mapper (e.g. the command line), as JSON.
-    pub(crate) extra: String,
+    extra: String,
 }
 
 /// Reads the world into a state and its tensors.
@@ -212,9 +212,52 @@ fn object_state(world: &World, entity: Entity) -> Result<ObjectState, CatmapErro
     })
 }
 
-/// The configuration a checkpoint was taken with.
-pub(crate) fn config_of(state: &MapperState) -> &MapperConfig {
-    &state.config
+/// A checkpoint read back, before a mapper is built from it (`Mapper::from_checkpoint`): what
+/// its caller needs to reopen the stream where the run stopped.
+pub struct SavedMapper {
+    loaded: catmap::checkpoint::LoadedCheckpoint<MapperState>,
+    /// The state file (named in errors).
+    file: PathBuf,
+}
+
+impl SavedMapper {
+    /// Reads the latest complete checkpoint in `dir` (see `catmap::checkpoint`).
+    pub fn load(dir: &Path) -> Result<Self, CatmapError> {
+        let loaded = catmap::checkpoint::read_checkpoint::<MapperState>(dir)?;
+        let file = dir.join(&loaded.manifest.state.name);
+        Ok(Self { loaded, file })
+    }
+
+    /// The configuration it was taken with.
+    pub fn config(&self) -> &MapperConfig {
+        &self.loaded.state.config
+    }
+
+    /// What the caller stored beside the mapper (its JSON).
+    pub fn extra(&self) -> &str {
+        &self.loaded.state.extra
+    }
+
+    /// Where the run was when it was taken (e.g. "frame 40 of 120").
+    pub fn label(&self) -> &str {
+        &self.loaded.manifest.label
+    }
+
+    /// Stream positions consumed (frames ingested and skipped): the stream continues here.
+    pub fn positions_consumed(&self) -> usize {
+        let progress = &self.loaded.state.progress;
+        (progress.frames_ingested + progress.frames_skipped) as usize
+    }
+
+    /// Whether the stream had ended.
+    pub fn stream_ended(&self) -> bool {
+        self.loaded.state.progress.ended.is_some()
+    }
+
+    /// Its parts: the state, the tensors and the state file's path.
+    pub(crate) fn into_parts(self) -> (MapperState, TensorStore, PathBuf) {
+        (self.loaded.state, self.loaded.tensors, self.file)
+    }
 }
 
 /// Writes `state` and `tensors` into a mapper world freshly built from the state's config

@@ -3,7 +3,6 @@
 use std::collections::BTreeMap;
 
 use bevy_ecs::prelude::*;
-use catmap::categories::nocs::NocsFrame;
 use catmap::geometry::oriented_box::OrientedBox;
 use catmap::objects::frame_observation::FrameObservation;
 use catmap::objects::keyframes::KeyframeWindow;
@@ -55,6 +54,21 @@ pub struct LatestBox {
 }
 
 impl LatestBox {
+    /// The boxes of `observation` in `frame`, and whether the frame became a keyframe when
+    /// offered to the window (`None`: not offered yet).
+    pub fn of(
+        frame: FrameIndex,
+        observation: &catmap::objects::frame_observation::ObjectObservation,
+        admission: Option<catmap::objects::keyframes::Admission>,
+    ) -> Self {
+        Self {
+            frame,
+            tight: observation.tight_box,
+            sample: observation.sample_box,
+            became_keyframe: admission.is_some_and(|a| a.is_keyframe()),
+        }
+    }
+
     /// The latest sighting, for the step scheduler.
     pub fn last_seen(&self) -> catmap::training::LastSeen {
         catmap::training::LastSeen {
@@ -178,11 +192,12 @@ impl Subcategories {
 
 /// A member's place in a category field.
 #[derive(Component, Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct CategorySlot {
-    /// Index of the category field.
-    pub field: usize,
-    /// The member's code index.
-    pub member: usize,
-    /// The member's NOCS frame.
-    pub nocs: NocsFrame,
+pub struct CategorySlot(pub catmap::categories::field_set::MemberPlace);
+
+impl std::ops::Deref for CategorySlot {
+    type Target = catmap::categories::field_set::MemberPlace;
+
+    fn deref(&self) -> &Self::Target {
+        &self.0
+    }
 }

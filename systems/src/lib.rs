@@ -4,27 +4,23 @@
 //! Systems are thin: they read components, call a `catmap::` function and write components.
 //! [`schedule::build_schedule`] is the only place that orders them; [`mapper::Mapper`] is the facade.
 
-pub mod categories_report;
-pub mod categorize;
-pub mod category_fields;
-mod checkpoint;
-pub mod cleanup;
-pub mod clouds;
+// The ECS data, the stages, and the one schedule that orders them.
 pub mod components;
-pub mod ingest;
-pub mod log_categories;
-pub mod log_rerun;
-pub mod mapper;
-pub mod meshes;
-pub mod register;
 pub mod resources;
-pub mod rrd_file;
 pub mod schedule;
-pub mod segment;
-pub mod snapshot;
-pub mod track;
-pub mod train;
+pub mod stages;
 
-pub use mapper::{Mapper, MapperError};
-pub use snapshot::MapSnapshot;
+// The facade, and the map as it is read out and saved.
+pub mod categories_report;
+mod checkpoint;
+pub mod mapper;
+pub mod snapshot;
 pub mod summary;
+
+// Rerun: the entity paths logged to, and recording files.
+pub mod rerun_paths;
+pub mod rrd_file;
+
+pub use checkpoint::SavedMapper;
+pub use mapper::{Mapper, MapperError, RunOutcome, RunPhase, RunProgress};
+pub use snapshot::MapSnapshot;

@@ -6,14 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
-mod cli_compare;
-mod cli_eval;
-mod cli_run;
-mod cli_synth;
-mod progress;
-mod run_outputs;
-mod run_phases;
-mod run_plan;
+mod cli;
 
 /// Object-level RGB-D mapping with category-level neural fields.
 ///
@@ -25,7 +18,7 @@ struct Cli {
     command: Option<Command>,
     /// The options of `catmap run`, for `catmap` without a subcommand.
     #[command(flatten)]
-    run: cli_run::RunArgs,
+    run: cli::run::RunArgs,
 }
 
 /// The version, with the commit it was built from when built from a git checkout (`build.rs`).
@@ -34,13 +27,13 @@ pub(crate) const VERSION: &str = env!("CATMAP_VERSION");
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Map a dataset (default: synthesise the default scene into OUT/scene and map it).
-    Run(cli_run::RunArgs),
+    Run(cli::run::RunArgs),
     /// Write a synthetic scene in the Replica (vMAP) layout, with ground-truth meshes.
-    Synth(cli_synth::SynthArgs),
+    Synth(cli::synth::SynthArgs),
     /// Score predicted object meshes against ground-truth meshes (accuracy, completion, C.R.).
-    Eval(cli_eval::EvalArgs),
+    Eval(cli::eval::EvalArgs),
     /// Compare two runs' metrics.json side by side (per class, repeated vs unique objects, all).
-    Compare(cli_compare::CompareArgs),
+    Compare(cli::compare::CompareArgs),
     /// Print the default configuration as TOML (a config file lists only what it changes).
     Config,
 }
@@ -55,10 +48,10 @@ fn main() -> anyhow::Result<()> {
         .init();
     let cli = Cli::parse();
     match cli.command.unwrap_or(Command::Run(cli.run)) {
-        Command::Run(args) => cli_run::run(&args),
-        Command::Synth(args) => cli_synth::synth(&args),
-        Command::Eval(args) => cli_eval::eval(&args),
-        Command::Compare(args) => cli_compare::compare(&args),
+        Command::Run(args) => cli::run::run(&args),
+        Command::Synth(args) => cli::synth::synth(&args),
+        Command::Eval(args) => cli::eval::eval(&args),
+        Command::Compare(args) => cli::compare::compare(&args),
         Command::Config => {
             print_stdout(&catmap::MapperConfig::default().to_toml());
             Ok(())

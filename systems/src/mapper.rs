@@ -1,9 +1,7 @@
 //! The `Mapper` facade: a `World` with the mapper's resources and schedule, fed frame by frame.
 
 use std::collections::BTreeMap;
-use std::ops::ControlFlow;
 use std::path::Path;
-use std::time::Duration;
 
 use bevy_ecs::prelude::*;
 use catmap::dataset::stream::{StreamMessage, StreamStats};
@@ -14,9 +12,8 @@ use catmap::rng::{RngStream, seeded_rng};
 use catmap::{MapperConfig, RgbdFrame};
 use crossbeam_channel::{Receiver, Sender, TrySendError, bounded};
 
+use crate::checkpoint::SavedMapper;
 use crate::components::{Background, Keyframes, ObjectCloud, ObjectRng, VisibleFrames};
-use crate::log_rerun::{Rerun, log_world_setup};
-use crate::meshes::collect_meshes;
 use crate::resources::CategoryFields;
 use crate::resources::{
     CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, SmallInstances, StageTimes,
@@ -27,9 +24,14 @@ use crate::schedule::{
     build_training_schedule,
 };
 use crate::snapshot::MapSnapshot;
+use crate::stages::log_rerun::{Rerun, log_world_setup};
+use crate::stages::meshes::collect_meshes;
 
 mod after_stream;
 mod phase_chunks;
+mod run;
+
+pub use run::{RunOutcome, RunPhase, RunProgress};
 
 /// Errors of the mapper facade.
 #[derive(Debug, thiserror::Error)]
@@ -117,11 +119,6 @@ impl Mapper {
         &self.world.resource::<Settings>().0
     }
 
-    /// Takes frames from `inbox` from now on (e.g. a resumed run's new reader thread).
-    pub fn attach_inbox(&mut self, inbox: Receiver<StreamMessage>) {
-        self.world.insert_resource(FrameInbox(inbox));
-    }
-
     /// Logs to `recording` from now on (the `Log` stage only runs with a recording).
     pub fn set_recording(&mut self, recording: rerun::RecordingStream) {
         log_world_setup(&recording);
@@ -181,37 +178,6 @@ impl Mapper {
         self.world.resource::<StreamProgress>().ended.is_some()
     }
 
-    /// Steps until the stream ends, calling `on_step` after each step with the frames ingested so far.
-    pub fn run_to_end(&mut self, mut on_step: impl FnMut(u64)) {
-        self.run_until(|frames| {
-            on_step(frames);
-            ControlFlow::Continue(())
-        });
-    }
-
-    /// Steps until the stream ends or `on_step` (called after each step with the frames
-    /// ingested so far) breaks; returns whether the stream has ended.
-    pub fn run_until(&mut self, mut on_step: impl FnMut(u64) -> ControlFlow<()>) -> bool {
-        while !self.stream_ended() {
-            let inbox = self.world.resource::<FrameInbox>().0.clone();
-            if inbox.is_empty() {
-                // Wait for the reader instead of spinning; the timeout keeps the loop responsive.
-                let mut select = crossbeam_channel::Select::new();
-                select.recv(&inbox);
-                let ready = select.ready_timeout(Duration::from_millis(100)).is_ok();
-                if !ready || !inbox.is_empty() {
-                    continue;
-                }
-                // Ready yet empty: the reader hung up without its end; a step lets ingest end the stream.
-            }
-            self.step();
-            if on_step(self.world.resource::<StreamProgress>().frames_ingested).is_break() {
-                break;
-            }
-        }
-        self.stream_ended()
-    }
-
     /// Stream positions consumed so far (frames ingested plus frames the reader skipped): a
     /// resumed run's reader starts here.
     pub fn positions_consumed(&self) -> usize {
@@ -227,19 +193,14 @@ impl Mapper {
         Ok(())
     }
 
-    /// A mapper restored from the checkpoint in `dir`, fed by `inbox` from the stream position
-    /// [`Mapper::positions_consumed`] on (`None` once the stream had ended); returns it with the
-    /// caller's `extra` JSON.
-    pub fn resume(dir: &Path, inbox: Option<Receiver<StreamMessage>>) -> Result<(Self, String), MapperError> {
-        let loaded = catmap::checkpoint::read_checkpoint::<crate::checkpoint::MapperState>(dir)?;
-        let file = dir.join(&loaded.manifest.state.name);
-        let config = crate::checkpoint::config_of(&loaded.state).clone();
-        let inbox = inbox.unwrap_or_else(crossbeam_channel::never);
-        let mut mapper = Self::with_inbox(config, inbox)?;
-        let extra = loaded.state.extra.clone();
-        crate::checkpoint::restore(&mut mapper.world, loaded.state, loaded.tensors, &file)?;
+    /// A mapper restored from `saved`, fed by `inbox` from [`SavedMapper::positions_consumed`]
+    /// on (`crossbeam_channel::never()` when [`SavedMapper::stream_ended`]).
+    pub fn from_checkpoint(saved: SavedMapper, inbox: Receiver<StreamMessage>) -> Result<Self, MapperError> {
+        let mut mapper = Self::with_inbox(saved.config().clone(), inbox)?;
+        let (state, tensors, file) = saved.into_parts();
+        crate::checkpoint::restore(&mut mapper.world, state, tensors, &file)?;
         mapper.category_phase_started = mapper.world.resource::<PhaseProgress>().category_steps > 0;
-        Ok((mapper, extra))
+        Ok(mapper)
     }
 
     /// How the fields have trained so far: the schedule, each field's steps and state, and why
@@ -266,7 +227,7 @@ impl Mapper {
     pub fn extract_final_meshes(&mut self) -> MapMeshes {
         self.final_meshes.run(&mut self.world);
         let meshes = collect_meshes(&mut self.world);
-        crate::meshes::warn_missing_meshes(&mut self.world, &meshes);
+        crate::stages::meshes::warn_missing_meshes(&mut self.world, &meshes);
         meshes
     }
 
@@ -294,12 +255,6 @@ impl Mapper {
             tracing::warn!(error = %e, "flushing the Rerun recording failed");
         }
         snapshot
-    }
-
-    /// Like [`Mapper::finish`], also returning the seconds spent per stage.
-    pub fn finish_keeping_times(self) -> (MapSnapshot, BTreeMap<String, f64>) {
-        let times = self.stage_seconds();
-        (self.finish(), times)
     }
 
     /// Seconds spent per stage so far.

@@ -4,9 +4,10 @@ use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use bevy_ecs::prelude::*;
+use catmap::categories::field_set::CategoryFieldSet;
 use catmap::dataset::stream::{StreamMessage, StreamStats};
 use catmap::field::AdamWConfig;
-use catmap::field::category::CategoryBatch;
+use catmap::sensor::frame::SharedFrame;
 use catmap::training::StreamPhase;
 use catmap::{ClassId, FrameIndex, MapperConfig, ObjectId};
 use crossbeam_channel::Receiver;
@@ -33,6 +34,42 @@ pub struct StreamProgress {
 }
 
 impl StreamProgress {
+    /// Counts one message from the stream (a skipped frame is logged); returns the frame it
+    /// carries, if any.
+    pub fn record(&mut self, message: StreamMessage) -> Option<SharedFrame> {
+        match message {
+            StreamMessage::Frame(frame) => {
+                tracing::trace!(frame = %frame.index, "ingest");
+                self.frames_ingested += 1;
+                self.last_frame = Some(frame.index);
+                return Some(frame);
+            }
+            StreamMessage::Skipped { position, reason } => {
+                tracing::warn!(position, %reason, "skipping frame");
+                self.frames_skipped += 1;
+            }
+            StreamMessage::End(stats) => {
+                tracing::debug!(?stats, "end of stream");
+                self.ended = Some(stats);
+            }
+        }
+        None
+    }
+
+    /// Ends a stream whose reader is gone without its end message (it died): what was mapped
+    /// is kept.
+    pub fn end_without_message(&mut self) {
+        tracing::warn!(
+            frames = self.frames_ingested,
+            "the stream stopped without its end; finishing"
+        );
+        self.ended = Some(StreamStats {
+            frames_sent: self.frames_ingested,
+            frames_skipped: self.frames_skipped,
+            ..StreamStats::default()
+        });
+    }
+
     /// Whether frames still stream in.
     pub fn phase(&self) -> StreamPhase {
         if self.ended.is_some() {
@@ -180,40 +217,39 @@ pub struct TrainingSchedule {
     pub planned_categories: usize,
 }
 
-/// The category fields and their members.
+/// The category fields and their members (`catmap::categories::field_set`), and the steps
+/// queued for them.
 #[derive(Resource, Debug)]
 pub struct CategoryFields {
-    /// One field per multi-member subcategory, trained together.
-    pub batch: CategoryBatch,
-    /// Per field, its members in code order.
-    pub members: Vec<Vec<ObjectId>>,
-    /// Per field, its creation number (its key in the step scheduler; kept while the field
-    /// continues under a new membership).
-    pub ids: Vec<u32>,
+    /// The fields, their members and keys.
+    pub set: CategoryFieldSet,
     /// Steps queued and not yet run.
     pub pending: u64,
     /// Steps run.
     pub steps_done: u64,
-    /// Latest total loss per field.
-    pub losses: Vec<f32>,
-    /// Fields created so far (seeds the next one's generator).
-    pub fields_created: u32,
-    /// Membership changes applied so far (seeds the fresh codes of the next one).
-    pub remaps: u32,
 }
 
 impl CategoryFields {
     /// No fields yet.
     pub fn new(optimiser: AdamWConfig) -> Self {
         Self {
-            batch: CategoryBatch::new(optimiser),
-            members: Vec::new(),
-            ids: Vec::new(),
+            set: CategoryFieldSet::new(optimiser),
             pending: 0,
             steps_done: 0,
-            losses: Vec::new(),
-            fields_created: 0,
-            remaps: 0,
         }
+    }
+}
+
+impl std::ops::Deref for CategoryFields {
+    type Target = CategoryFieldSet;
+
+    fn deref(&self) -> &CategoryFieldSet {
+        &self.set
+    }
+}
+
+impl std::ops::DerefMut for CategoryFields {
+    fn deref_mut(&mut self) -> &mut CategoryFieldSet {
+        &mut self.set
     }
 }

@@ -3,21 +3,21 @@
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, SingleThreadedExecutor};
 
-use crate::categorize::update_categories;
-use crate::category_fields::{sync_category_fields, train_category_fields};
-use crate::cleanup::despawn_consumed_frames;
-use crate::clouds::{accumulate_clouds, refresh_object_bounds};
-use crate::ingest::ingest_frames;
-use crate::log_categories::log_category_training;
-use crate::log_rerun::{
+use crate::stages::categorize::update_categories;
+use crate::stages::category_fields::{sync_category_fields, train_category_fields};
+use crate::stages::cleanup::despawn_consumed_frames;
+use crate::stages::clouds::{accumulate_clouds, refresh_object_bounds};
+use crate::stages::ingest::ingest_frames;
+use crate::stages::log_categories::log_category_training;
+use crate::stages::log_rerun::{
     Rerun, log_camera_frames, log_field_losses, log_field_meshes, log_instance_legend, log_memberships,
     log_object_boxes, log_object_clouds,
 };
-use crate::meshes::{extract_final_meshes, extract_preview_meshes};
-use crate::register::register_categories;
-use crate::segment::observe_frames;
-use crate::track::{record_background_views, record_object_views, spawn_new_objects};
-use crate::train::{attach_fields, queue_online_steps, train_fields};
+use crate::stages::meshes::{extract_final_meshes, extract_preview_meshes};
+use crate::stages::register::register_categories;
+use crate::stages::segment::observe_frames;
+use crate::stages::track::{record_background_views, record_object_views, spawn_new_objects};
+use crate::stages::train::{attach_fields, queue_online_steps, train_fields};
 
 /// The mapper's stages, in the order they run each tick.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]

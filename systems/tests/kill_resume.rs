@@ -38,6 +38,11 @@ voxel_size_m = 0.04
 [checkpoint]
 every_frames = 2
 every_steps = 50
+
+# The paper's fixed phases (the refinement, then the category phase, 100 steps each), so that
+# kills land in every phase; the fast schedule would run one phase until its fields converge.
+[schedule]
+policy = "paper"
 "#;
 
 fn catmap() -> Command {

@@ -3,10 +3,12 @@
 use catmap::MapperConfig;
 use catmap::dataset::FrameSource;
 use catmap::synth::SyntheticScene;
-use catmap_systems::Mapper;
+use std::ops::ControlFlow;
+
+use catmap_systems::{Mapper, RunOutcome};
 
 /// A mapper with `config` fed the frames of `scene` at `positions` one tick each; the stream is
-/// then ended and the training due after it (`FieldConfig::steps_after_stream`) is run.
+/// then ended and the rest of the run (the training after it, the category phase) is run.
 pub fn map_scene(scene: &SyntheticScene, positions: impl IntoIterator<Item = usize>, config: MapperConfig) -> Mapper {
     let mut mapper = Mapper::new(config).expect("valid config");
     for position in positions {
@@ -17,6 +19,6 @@ pub fn map_scene(scene: &SyntheticScene, positions: impl IntoIterator<Item = usi
     }
     mapper.end_stream();
     mapper.step();
-    mapper.train_after_stream(|_, _| {});
+    assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
     mapper
 }

@@ -2,8 +2,9 @@
 //!
 //! Each target draws inputs from its own ChaCha stream (seed `CATMAP_FUZZ_SEED`, default 0, mixed
 //! with the target's name), so a run is reproducible: the n-th input of a seed is always the same.
-//! A target runs for `CATMAP_FUZZ_SECONDS` seconds (default [`DEFAULT_SECONDS`]); each input is
-//! executed under `catch_unwind`, and a panic or a broken property (an error that does not name
+//! A target runs a fixed number of inputs, `CATMAP_FUZZ_INPUTS` (default [`DEFAULT_INPUTS`]), so
+//! that what `cargo test` tries does not depend on the machine's load; for long fuzzing,
+//! `CATMAP_FUZZ_SECONDS` runs each target for that many seconds instead. Each input is executed under `catch_unwind`, and a panic or a broken property (an error that does not name
 //! the file, a decoded frame that fails validation) is a failure. Failing inputs are saved under
 //! `$CARGO_TARGET_TMPDIR/fuzz-failures/<target>/` with the seed and iteration in the name; with
 //! `CATMAP_FUZZ_TRACE` set, every input is first written to `in-flight.bin` there (to catch
@@ -22,8 +23,8 @@ use std::time::{Duration, Instant};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-/// Seconds per target in a plain `cargo test`.
-pub const DEFAULT_SECONDS: f64 = 3.0;
+/// Inputs per target in a plain `cargo test`.
+pub const DEFAULT_INPUTS: u64 = 2000;
 /// A run stops early after this many failures.
 const MAX_FAILURES: usize = 5;
 
@@ -59,14 +60,40 @@ pub fn pick<'a, T>(items: &'a [T], rng: &mut ChaCha8Rng) -> &'a T {
     &items[rng.random_range(0..items.len())]
 }
 
-/// Time budget per target: `CATMAP_FUZZ_SECONDS`, else [`DEFAULT_SECONDS`].
-pub fn budget() -> Duration {
-    let seconds = std::env::var("CATMAP_FUZZ_SECONDS")
-        .ok()
-        .and_then(|s| s.trim().parse::<f64>().ok())
-        .filter(|s| s.is_finite() && *s >= 0.0)
-        .unwrap_or(DEFAULT_SECONDS);
-    Duration::from_secs_f64(seconds)
+/// How long a target runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Budget {
+    /// This many inputs (at least one).
+    Inputs(u64),
+    /// Until this much time has passed (at least one input).
+    Time(Duration),
+}
+
+impl Budget {
+    /// Whether a run that executed `executions` inputs since `started` goes on.
+    fn goes_on(self, executions: u64, started: Instant) -> bool {
+        match self {
+            Budget::Inputs(n) => executions < n.max(1),
+            Budget::Time(limit) => executions == 0 || started.elapsed() < limit,
+        }
+    }
+}
+
+/// The budget per target: `CATMAP_FUZZ_SECONDS` when set, else `CATMAP_FUZZ_INPUTS` inputs
+/// (default [`DEFAULT_INPUTS`]).
+pub fn budget() -> Budget {
+    let var = |name: &str| std::env::var(name).ok().map(|s| s.trim().to_owned());
+    if let Some(seconds) = var("CATMAP_FUZZ_SECONDS").and_then(|s| s.parse::<f64>().ok())
+        && seconds.is_finite()
+        && seconds >= 0.0
+    {
+        return Budget::Time(Duration::from_secs_f64(seconds));
+    }
+    Budget::Inputs(
+        var("CATMAP_FUZZ_INPUTS")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(DEFAULT_INPUTS),
+    )
 }
 
 /// Base seed: `CATMAP_FUZZ_SEED`, else 0.
@@ -99,7 +126,7 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
         .unwrap_or_else(|| "non-string panic payload".to_owned())
 }
 
-/// Runs target `name` for [`budget`]: `generate` draws an input, `execute` runs the reader on it.
+/// Runs target `name` within its [`budget`]: `generate` draws an input, `execute` runs the reader on it.
 /// `save` renders an input as bytes (plus a description) for the failure file. Panics when any
 /// input panicked or broke a property, listing them all.
 pub fn fuzz<I>(
@@ -113,7 +140,7 @@ pub fn fuzz<I>(
     let mut rng = target_rng(name);
     let started = Instant::now();
     let mut report = Report::default();
-    while (report.executions == 0 || started.elapsed() < budget) && report.failures.len() < MAX_FAILURES {
+    while budget.goes_on(report.executions, started) && report.failures.len() < MAX_FAILURES {
         let iteration = report.executions;
         let input = generate(&mut rng);
         report.executions += 1;

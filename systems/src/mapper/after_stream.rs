@@ -7,23 +7,15 @@ use catmap::config::FirstPhase;
 
 use super::Mapper;
 use super::phase_chunks::PhaseChunks;
+use super::run::{RunPhase, RunProgress};
 use crate::resources::{AfterStreamPhase, CategoryFields, PhaseProgress, Settings, TrainingQueue, TrainingSchedule};
 
 impl Mapper {
-    /// The training due once the stream has ended (`MapperConfig::after_stream`: the offline
-    /// training, the paper's refinement, or the fast schedule's one phase of every field), in
-    /// chunks of 50; `on_progress` gets (done, cap).
-    pub fn train_after_stream(&mut self, mut on_progress: impl FnMut(u64, u64)) {
-        self.train_after_stream_until(|done, total| {
-            on_progress(done, total);
-            ControlFlow::Continue(())
-        });
-    }
-
-    /// Like [`Mapper::train_after_stream`], continuing from the steps already done (after a
-    /// resume) and stopping early when `on_chunk` breaks; returns whether the phase is complete.
-    /// Under the fast schedule the phase also ends once no field gains from more steps.
-    pub fn train_after_stream_until(&mut self, on_chunk: impl FnMut(u64, u64) -> ControlFlow<()>) -> bool {
+    /// The training due once the stream has ended (`MapperConfig::after_stream`), continuing
+    /// from the steps already done and stopping early when `on_chunk` breaks; returns whether
+    /// the phase is complete. Under the fast schedule the phase also ends once no field gains
+    /// from more steps.
+    pub(super) fn after_stream_until(&mut self, on_chunk: &mut impl FnMut(RunProgress) -> ControlFlow<()>) -> bool {
         let phases = self.world.resource::<Settings>().0.after_stream();
         let first = phases.first;
         let chunks = PhaseChunks {
@@ -32,7 +24,14 @@ impl Mapper {
             ends_on_convergence: phases.ends_on_convergence,
             runs_once_at_least: false,
         };
-        self.run_phase_chunks(chunks, on_chunk, |mapper, n| {
+        let report = |done, cap| {
+            on_chunk(RunProgress {
+                phase: RunPhase::AfterStream,
+                done,
+                cap: Some(cap),
+            })
+        };
+        self.run_phase_chunks(chunks, report, |mapper, n| {
             mapper.world.resource_mut::<TrainingQueue>().pending += n;
             match first {
                 FirstPhase::ObjectFields => {
@@ -49,36 +48,14 @@ impl Mapper {
         })
     }
 
-    /// Runs `iterations` training steps on the keyframes gathered so far (the offline protocol,
-    /// or extra refinement), in chunks of `chunk` steps; `on_progress` gets the steps done.
-    pub fn train(&mut self, iterations: u64, chunk: u64, mut on_progress: impl FnMut(u64)) {
-        let mut done = 0;
-        while done < iterations {
-            let n = chunk.max(1).min(iterations - done);
-            self.world.resource_mut::<TrainingQueue>().pending += n;
-            self.training.run(&mut self.world);
-            done += n;
-            on_progress(done);
-        }
-    }
-
     /// The category phase (`category_fields.enabled`): creates the category fields from the
-    /// registered subcategories and runs `category_fields.iterations` steps in chunks of 50 (each
-    /// also a step of the per-object fields, which serve the objects outside category fields);
-    /// `on_progress` gets (done, total). Returns the number of category fields.
-    pub fn train_categories(&mut self, mut on_progress: impl FnMut(u64, u64)) -> usize {
-        self.train_categories_until(|done, total| {
-            on_progress(done, total);
-            ControlFlow::Continue(())
-        });
-        self.category_field_count()
-    }
-
-    /// Like [`Mapper::train_categories`], continuing from the steps already done (after a
-    /// resume) and stopping early when `on_chunk` breaks; returns whether the phase is complete.
-    /// Under the fast schedule the phase also ends once no field gains from more steps; online,
-    /// the fast schedule has no category phase (the category fields trained in the phase before).
-    pub fn train_categories_until(&mut self, on_chunk: impl FnMut(u64, u64) -> ControlFlow<()>) -> bool {
+    /// registered subcategories and runs `category_fields.iterations` steps (each also a step of
+    /// the per-object fields, which serve the objects outside category fields), continuing from
+    /// the steps already done and stopping early when `on_chunk` breaks; returns whether the
+    /// phase is complete. Under the fast schedule the phase also ends once no field gains from
+    /// more steps; online, the fast schedule has no category phase (the category fields trained
+    /// in the phase before).
+    pub(super) fn categories_until(&mut self, on_chunk: &mut impl FnMut(RunProgress) -> ControlFlow<()>) -> bool {
         let phases = self.world.resource::<Settings>().0.after_stream();
         let Some(cap) = phases.category_cap else {
             return true;
@@ -91,7 +68,14 @@ impl Mapper {
             // The first chunk runs even for zero iterations: it creates the category fields.
             runs_once_at_least: !started,
         };
-        self.run_phase_chunks(chunks, on_chunk, |mapper, n| {
+        let report = |done, cap| {
+            on_chunk(RunProgress {
+                phase: RunPhase::Categories,
+                done,
+                cap: Some(cap),
+            })
+        };
+        self.run_phase_chunks(chunks, report, |mapper, n| {
             mapper.category_phase_started = true;
             mapper.world.resource_mut::<CategoryFields>().pending += n;
             mapper.world.resource_mut::<TrainingQueue>().pending += n;

@@ -33,6 +33,10 @@ angles = 30
 [category_fields]
 iterations = 20
 
+# The default (fast) schedule, capped: a short phase after the stream.
+[schedule]
+max_steps_after_stream = 40
+
 [meshes]
 background_voxel_m = 0.15
 

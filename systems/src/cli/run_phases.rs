@@ -12,91 +12,80 @@ use catmap::CatmapError;
 use catmap::config::{CheckpointConfig, FirstPhase};
 use catmap::dataset::FrameSource;
 use catmap::dataset::stream::{FrameStream, stream_positions};
-use catmap_systems::Mapper;
+use catmap_systems::{Mapper, RunOutcome, RunPhase, RunProgress, SavedMapper};
 
-use crate::progress::bar;
-use crate::run_plan::RunPlan;
+use crate::cli::progress::bar;
+use crate::cli::run_plan::RunPlan;
 
 /// Exit code of a run stopped by Ctrl-C after saving its checkpoint (128 + SIGINT).
 const INTERRUPTED_EXIT: i32 = 130;
+
+/// How a run starts: fresh from a configuration, or from a checkpoint.
+pub enum Start {
+    /// A new run.
+    Fresh(Box<catmap::MapperConfig>),
+    /// A run continued from its checkpoint.
+    Resumed(Box<SavedMapper>),
+}
 
 /// Continues the run whose output folder is `out` from its checkpoint.
 pub fn resume(out: &Path) -> anyhow::Result<()> {
     let started = Instant::now();
     let dir = out.join("checkpoint");
-    let (mapper, extra) = Mapper::resume(&dir, None)
+    let saved = SavedMapper::load(&dir)
         .with_context(|| format!("cannot resume from {} (no usable checkpoint)", dir.display()))?;
-    let plan: RunPlan =
-        serde_json::from_str(&extra).with_context(|| format!("{}: the run plan is unreadable", dir.display()))?;
-    let manifest = catmap::checkpoint::read_manifest(&dir)?;
-    tracing::info!(checkpoint = %dir.display(), at = %manifest.label, "resuming");
-    let source = plan.open_source(mapper.config())?;
-    drive(mapper, plan, source, started)
+    let plan: RunPlan = serde_json::from_str(saved.extra())
+        .with_context(|| format!("{}: the run plan is unreadable", dir.display()))?;
+    tracing::info!(checkpoint = %dir.display(), at = saved.label(), "resuming");
+    let source = plan.open_source(saved.config())?;
+    drive(Start::Resumed(Box::new(saved)), plan, source, started)
 }
 
-/// Runs every remaining phase of `mapper` (fresh or resumed) and writes the outputs.
-pub fn drive(mut mapper: Mapper, plan: RunPlan, source: Arc<dyn FrameSource>, started: Instant) -> anyhow::Result<()> {
-    let config = mapper.config().clone();
+/// Builds the mapper (fresh or resumed) fed by a reader thread from where its stream stopped,
+/// runs every remaining phase with checkpoints between steps, and writes the outputs.
+pub fn drive(start: Start, plan: RunPlan, source: Arc<dyn FrameSource>, started: Instant) -> anyhow::Result<()> {
+    let config = match &start {
+        Start::Fresh(config) => (**config).clone(),
+        Start::Resumed(saved) => saved.config().clone(),
+    };
+    config.validate()?;
     let positions = stream_positions(source.len(), config.stream.stride, config.stream.max_frames);
     anyhow::ensure!(!positions.is_empty(), "{} has no frames to map", source.name());
+    let (consumed, ended) = match &start {
+        Start::Fresh(_) => (0, false),
+        Start::Resumed(saved) => (saved.positions_consumed().min(positions.len()), saved.stream_ended()),
+    };
+    let stream = (!ended).then(|| {
+        tracing::info!(dataset = %source.name(), frames = positions.len(), from = consumed, "mapping");
+        let rest = positions[consumed..].to_vec();
+        FrameStream::spawn(Arc::clone(&source), rest, config.stream.channel_capacity)
+    });
+    let inbox = stream
+        .as_ref()
+        .map_or_else(crossbeam_channel::never, |s| s.receiver.clone());
+    let mut mapper = match start {
+        Start::Fresh(config) => Mapper::with_inbox(*config, inbox)?,
+        Start::Resumed(saved) => Mapper::from_checkpoint(*saved, inbox)?,
+    };
     let mut checkpoints = Checkpoints::new(&plan, config.checkpoint.clone(), started);
     if let Some(recording) = plan.open_recording(positions.len(), &config.rerun)? {
         mapper.set_recording(recording);
     }
-
-    let consumed = mapper.positions_consumed().min(positions.len());
-    let stream = (!mapper.stream_ended()).then(|| {
-        tracing::info!(dataset = %source.name(), frames = positions.len(), from = consumed, "mapping");
-        let stream = FrameStream::spawn(
-            Arc::clone(&source),
-            positions[consumed..].to_vec(),
-            config.stream.channel_capacity,
-        );
-        mapper.attach_inbox(stream.receiver.clone());
-        stream
-    });
-    let progress = bar(positions.len() as u64, "mapping");
-    progress.set_position(consumed as u64);
-    let every_frames = checkpoints.every_frames();
-    while !mapper.run_until(|frames| {
-        progress.set_position(frames);
-        checkpoints.break_if(frames.is_multiple_of(every_frames))
+    let mut bars = PhaseBars::new(&config, positions.len() as u64);
+    while let RunOutcome::Paused(at) = mapper.run(|progress| {
+        bars.show(progress);
+        checkpoints.break_if(progress)
     }) {
-        let label = format!("frame {} of {}", mapper.positions_consumed(), positions.len());
+        let label = match at.phase {
+            RunPhase::Stream => format!("frame {} of {}", mapper.positions_consumed(), positions.len()),
+            RunPhase::AfterStream => format!("{}, {} steps", bars.after_stream, mapper.training_steps()),
+            RunPhase::Categories => "category fields".to_owned(),
+        };
         checkpoints.save(&mut mapper, &label)?;
     }
-    progress.finish_and_clear();
+    bars.finish();
     if let Some(stream) = stream {
         stream.join();
-    }
-
-    let phases = config.after_stream();
-    let every_steps = checkpoints.every_steps();
-    if phases.first_cap > 0 {
-        let what = match (config.fields.offline, phases.first) {
-            (true, _) => "training",
-            (false, FirstPhase::ObjectFields) => "refining",
-            (false, FirstPhase::ObjectAndCategoryFields) => "refining (objects and categories)",
-        };
-        let progress = bar(phases.first_cap, what);
-        while !mapper.train_after_stream_until(|done, _| {
-            progress.set_position(done);
-            checkpoints.break_if(done.is_multiple_of(every_steps))
-        }) {
-            let label = format!("{what}, {} steps", mapper.training_steps());
-            checkpoints.save(&mut mapper, &label)?;
-        }
-        progress.finish_and_clear();
-    }
-    if let Some(cap) = phases.category_cap {
-        let progress = bar(cap, "category fields");
-        while !mapper.train_categories_until(|done, _| {
-            progress.set_position(done);
-            checkpoints.break_if(done.is_multiple_of(every_steps))
-        }) {
-            checkpoints.save(&mut mapper, "category fields")?;
-        }
-        progress.finish_and_clear();
     }
     if config.category_fields.enabled {
         tracing::info!(
@@ -104,9 +93,57 @@ pub fn drive(mut mapper: Mapper, plan: RunPlan, source: Arc<dyn FrameSource>, st
             "category fields trained"
         );
     }
-    crate::run_outputs::write_outputs(mapper, &plan, source.name(), started)?;
+    crate::cli::run_outputs::write_outputs(mapper, &plan, source.name(), started)?;
     checkpoints.remove_after_success();
     Ok(())
+}
+
+/// One progress bar per phase of the run.
+struct PhaseBars {
+    /// The bar of the phase running, and which phase it is.
+    current: Option<(RunPhase, indicatif::ProgressBar)>,
+    /// Stream positions.
+    frames: u64,
+    /// What the phase after the stream is called.
+    after_stream: &'static str,
+}
+
+impl PhaseBars {
+    fn new(config: &catmap::MapperConfig, frames: u64) -> Self {
+        let after_stream = match (config.fields.offline, config.after_stream().first) {
+            (true, _) => "training",
+            (false, FirstPhase::ObjectFields) => "refining",
+            (false, FirstPhase::ObjectAndCategoryFields) => "refining (objects and categories)",
+        };
+        Self {
+            current: None,
+            frames,
+            after_stream,
+        }
+    }
+
+    /// Shows `progress`, starting its phase's bar when the phase changed.
+    fn show(&mut self, progress: RunProgress) {
+        if self.current.as_ref().is_none_or(|(phase, _)| *phase != progress.phase) {
+            self.finish();
+            let (cap, what) = match progress.phase {
+                RunPhase::Stream => (self.frames, "mapping"),
+                RunPhase::AfterStream => (progress.cap.unwrap_or(0), self.after_stream),
+                RunPhase::Categories => (progress.cap.unwrap_or(0), "category fields"),
+            };
+            self.current = Some((progress.phase, bar(cap, what)));
+        }
+        if let Some((_, bar)) = &self.current {
+            bar.set_position(progress.done);
+        }
+    }
+
+    /// Clears the bar shown.
+    fn finish(&mut self) {
+        if let Some((_, bar)) = self.current.take() {
+            bar.finish_and_clear();
+        }
+    }
 }
 
 /// When and where checkpoints are written, and whether Ctrl-C was pressed.
@@ -138,6 +175,20 @@ impl Checkpoints {
         }
     }
 
+    /// Break when a checkpoint is due after `progress` (every `every_frames` frames or
+    /// `every_steps` steps) or Ctrl-C was pressed.
+    fn break_if(&self, progress: RunProgress) -> ControlFlow<()> {
+        let due = match progress.phase {
+            RunPhase::Stream => progress.done.is_multiple_of(self.every_frames()),
+            RunPhase::AfterStream | RunPhase::Categories => progress.done.is_multiple_of(self.every_steps()),
+        };
+        if due || self.interrupted.load(Ordering::SeqCst) {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    }
+
     /// Frames between checkpoints (`u64::MAX` when disabled).
     fn every_frames(&self) -> u64 {
         if self.cfg.enabled && self.cfg.every_frames > 0 {
@@ -154,15 +205,6 @@ impl Checkpoints {
             self.cfg.every_steps.div_ceil(chunk) * chunk
         } else {
             u64::MAX
-        }
-    }
-
-    /// Break when a checkpoint is due or Ctrl-C was pressed.
-    fn break_if(&self, due: bool) -> ControlFlow<()> {
-        if due || self.interrupted.load(Ordering::SeqCst) {
-            ControlFlow::Break(())
-        } else {
-            ControlFlow::Continue(())
         }
     }
 

@@ -38,41 +38,38 @@ pub fn register_categories(
     if !config.categories.enabled || !config.fields.enabled {
         return;
     }
-    for (entity, category, mut previous) in &mut categories {
-        let members: Vec<Option<ClassMember>> = category
+    let (steps, growth) = (
+        config.field_steps_before_registration(),
+        config.categories.reregister_growth,
+    );
+    for (entity, category, previous) in &mut categories {
+        let class = category.class;
+        let members: Vec<_> = category
             .members
             .iter()
             .map(|id| class_member(*id, &index, &objects))
             .collect();
         let registered = previous.as_ref().map(|p| &p.registered_points);
-        let steps = config.field_steps_before_registration();
-        if class_readiness(&members, registered, steps, config.categories.reregister_growth) != ClassReadiness::Due {
+        if class_readiness(&members, registered, steps, growth) != ClassReadiness::Due {
             continue;
         }
-        let members: Vec<ClassMember> = members.into_iter().flatten().collect();
         let last = previous
             .as_ref()
             .map_or_else(ClassRegistration::default, |p| p.registration());
-        match update_class(
-            category.class,
-            &members,
-            &last,
-            &fields.objects,
-            &config.categories,
-            config.seed,
-        ) {
+        let members: Vec<ClassMember> = members.into_iter().flatten().collect();
+        match update_class(class, &members, &last, &fields.objects, &config.categories, config.seed) {
             Ok(update) => {
                 times.add("uncertainty", update.uncertainty_time);
                 times.add("register", update.register_time);
-                let record = write_back(category.class, update, &index, &mut commands);
-                match previous.as_mut() {
-                    Some(previous) => **previous = record,
+                let record = write_back(class, update, &index, &mut commands);
+                match previous {
+                    Some(mut previous) => *previous = record,
                     None => {
                         commands.entity(entity).insert(record);
                     }
                 }
             }
-            Err(e) => tracing::warn!(class = %category.class, error = %e, "class registration failed"),
+            Err(e) => tracing::warn!(class = %class, error = %e, "class registration failed"),
         }
     }
 }

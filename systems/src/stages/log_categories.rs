@@ -6,11 +6,9 @@ use bevy_ecs::prelude::*;
 
 use crate::components::CategorySlot;
 use crate::components::Object;
-use crate::log_rerun::{Rerun, paths, warn_on_error};
+use crate::rerun_paths::{self as paths, CATEGORY_TIMELINE, OwnerEntity};
 use crate::resources::CategoryFields;
-
-/// The timeline of the category phase.
-pub const CATEGORY_TIMELINE: &str = "category_step";
+use crate::stages::log_rerun::{Rerun, warn_on_error};
 
 /// Logs the latest losses and code norms (after each chunk of category steps).
 pub fn log_category_training(rerun: Res<Rerun>, fields: Res<CategoryFields>, members: Query<(&Object, &CategorySlot)>) {
@@ -19,7 +17,7 @@ pub fn log_category_training(rerun: Res<Rerun>, fields: Res<CategoryFields>, mem
     }
     rerun.0.set_time_sequence(CATEGORY_TIMELINE, fields.steps_done as i64);
     for (k, loss) in fields.losses.iter().enumerate() {
-        let path = format!("world/categories/{k}/loss");
+        let path = paths::category_loss(k);
         warn_on_error(
             rerun.0.log(path.as_str(), &rerun::Scalars::single(f64::from(*loss))),
             &path,
@@ -31,10 +29,10 @@ pub fn log_category_training(rerun: Res<Rerun>, fields: Res<CategoryFields>, mem
             continue;
         };
         for (name, value) in [
-            ("shape_code_norm", norm(field.shape_code(slot.member))),
-            ("texture_code_norm", norm(field.texture_code(slot.member))),
+            (OwnerEntity::ShapeCodeNorm, norm(field.shape_code(slot.member))),
+            (OwnerEntity::TextureCodeNorm, norm(field.texture_code(slot.member))),
         ] {
-            let path = format!("{}/{name}", paths::object(object.id));
+            let path = paths::of(Some(object.id), name);
             warn_on_error(rerun.0.log(path.as_str(), &rerun::Scalars::single(value)), &path);
         }
     }

@@ -69,7 +69,7 @@ pub fn eval(args: &EvalArgs) -> anyhow::Result<()> {
         Some(path) => read_object_classes(path).context("--classes")?,
         None => classes_beside(&args.pred),
     };
-    let ground_truth = crate::run_outputs::load_ground_truth(&args.gt, &classes)?;
+    let ground_truth = crate::cli::run_outputs::load_ground_truth(&args.gt, &classes)?;
     let settings = EvalSettings {
         crop: args.crop.into(),
         seed: args.seed,

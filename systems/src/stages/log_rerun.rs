@@ -24,33 +24,8 @@ use image::ImageEncoder;
 use crate::components::{
     CameraFrame, FieldLoss, FieldMesh, Membership, Object, ObjectBounds, ObjectClass, ObjectCloud, Reliability,
 };
+use crate::rerun_paths::{self as paths, OwnerEntity};
 use crate::resources::{Settings, StreamProgress};
-
-/// Fixed entity paths.
-pub mod paths {
-    /// Root of the 3D scene.
-    pub const WORLD: &str = "world";
-    /// Camera pose.
-    pub const CAMERA: &str = "world/camera";
-    /// Pinhole of the logged images.
-    pub const IMAGE: &str = "world/camera/image";
-    /// Colour image.
-    pub const RGB: &str = "world/camera/image/rgb";
-    /// Depth image.
-    pub const DEPTH: &str = "world/camera/image/depth";
-    /// Instance segmentation.
-    pub const INSTANCES: &str = "world/camera/image/instances";
-    /// The timeline.
-    pub const TIMELINE: &str = "frame";
-
-    /// Root of the background's entities.
-    pub const BACKGROUND: &str = "world/background";
-
-    /// Root of one object's entities.
-    pub fn object(id: catmap::ObjectId) -> String {
-        format!("world/objects/{id}")
-    }
-}
 
 /// The recording stream every log system writes to.
 #[derive(Resource, Clone)]
@@ -69,7 +44,7 @@ pub fn log_camera_frames(rerun: Res<Rerun>, settings: Res<Settings>, frames: Que
     let cfg = &settings.0.rerun;
     for frame in &frames {
         let frame = &frame.0;
-        rerun.0.set_time_sequence(paths::TIMELINE, frame.index.0 as i64);
+        rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.index.0 as i64);
         log_camera_pose(&rerun.0, frame);
         if frame.index.0.is_multiple_of(u64::from(cfg.image_every)) {
             log_images(&rerun.0, frame, cfg.image_downscale, cfg.jpeg_quality);
@@ -172,7 +147,7 @@ pub fn log_object_clouds(
 ) {
     let cfg = &settings.0.rerun;
     let Some(frame) = progress.last_frame else { return };
-    rerun.0.set_time_sequence(paths::TIMELINE, frame.0 as i64);
+    rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.0 as i64);
     let ended = progress.ended.is_some();
     let mut objects: Vec<_> = objects.iter().collect();
     objects.sort_by_key(|(object, _, _)| object.id);
@@ -190,7 +165,7 @@ pub fn log_object_clouds(
         let archetype = rerun::Points3D::new(positions)
             .with_colors([rerun::Color::from_rgb(r, g, b)])
             .with_radii([0.004]);
-        let path = format!("{}/points", paths::object(object.id));
+        let path = paths::of(Some(object.id), OwnerEntity::Points);
         warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
         logged_sizes.insert(object.id, size);
     }
@@ -213,7 +188,7 @@ pub fn log_object_boxes(
         .with_quaternions([rerun::Quaternion::from_xyzw([q.i, q.j, q.k, q.w])])
         .with_colors([rerun::Color::from_rgb(r, g, bl)])
         .with_labels([object_label(object.id, class.0)]);
-        let path = format!("{}/box", paths::object(object.id));
+        let path = paths::of(Some(object.id), OwnerEntity::Box);
         warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
     }
 }
@@ -225,16 +200,16 @@ pub fn log_field_losses(
     owners: Query<(Option<&Object>, &FieldLoss), Changed<FieldLoss>>,
 ) {
     let Some(frame) = progress.last_frame else { return };
-    rerun.0.set_time_sequence(paths::TIMELINE, frame.0 as i64);
+    rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.0 as i64);
     for (object, loss) in &owners {
         if loss.steps == 0 {
             continue;
         }
-        let owner = object.map_or_else(|| paths::BACKGROUND.to_owned(), |o| paths::object(o.id));
-        let path = format!("{owner}/loss");
+        let owner = object.map(|o| o.id);
+        let path = paths::of(owner, OwnerEntity::Loss);
         let scalar = rerun::Scalars::single(f64::from(loss.latest.total));
         warn_on_error(rerun.0.log(path.as_str(), &scalar), &path);
-        let path = format!("{owner}/steps");
+        let path = paths::of(owner, OwnerEntity::Steps);
         let steps = rerun::Scalars::single(loss.steps as f64);
         warn_on_error(rerun.0.log(path.as_str(), &steps), &path);
     }
@@ -248,13 +223,10 @@ pub fn log_field_meshes(
     owners: Query<(Option<&Object>, &FieldMesh, Option<&Membership>), Changed<FieldMesh>>,
 ) {
     if let Some(frame) = progress.last_frame {
-        rerun.0.set_time_sequence(paths::TIMELINE, frame.0 as i64);
+        rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.0 as i64);
     }
     for (object, mesh, membership) in &owners {
-        let path = format!(
-            "{}/mesh",
-            object.map_or_else(|| paths::BACKGROUND.to_owned(), |o| paths::object(o.id))
-        );
+        let path = paths::of(object.map(|o| o.id), OwnerEntity::Mesh);
         let m = &mesh.mesh;
         if m.is_empty() {
             warn_on_error(rerun.0.log(path.as_str(), &rerun::Clear::flat()), &path);
@@ -285,54 +257,50 @@ pub fn log_memberships(
     members: Query<(&Object, &Membership, Option<&Reliability>), Changed<Membership>>,
 ) {
     if let Some(frame) = progress.last_frame {
-        rerun.0.set_time_sequence(paths::TIMELINE, frame.0 as i64);
+        rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.0 as i64);
     }
     for (object, membership, reliability) in &members {
-        let b = membership.member.nocs.oriented_box();
-        let c = b.center();
-        let q = b.world_from_box.rotation;
-        let [r, g, bl] = SUBCATEGORY_PALETTE[membership.subcategory % SUBCATEGORY_PALETTE.len()];
-        let rep = if membership.representative == object.id {
-            " · rep"
-        } else {
-            ""
-        };
-        let label = format!(
-            "{} · sub {}{rep}",
-            object_label(object.id, membership.class),
-            membership.subcategory
-        );
-        let archetype = rerun::Boxes3D::from_centers_and_half_sizes(
-            [[c.x, c.y, c.z]],
-            [[b.half_extents.x, b.half_extents.y, b.half_extents.z]],
-        )
-        .with_quaternions([rerun::Quaternion::from_xyzw([q.i, q.j, q.k, q.w])])
-        .with_colors([rerun::Color::from_rgb(r, g, bl)])
-        .with_labels([label]);
-        let path = format!("{}/aligned_box", paths::object(object.id));
-        warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
+        let path = paths::of(Some(object.id), OwnerEntity::AlignedBox);
+        warn_on_error(rerun.0.log(path.as_str(), &aligned_box(object.id, membership)), &path);
         if let Some(reliability) = reliability {
-            let sphere = &reliability.0.sphere;
-            let positions: Vec<[f32; 3]> = sphere
-                .sphere_points
-                .iter()
-                .step_by(4)
-                .map(|p| [p.x, p.y, p.z])
-                .collect();
-            let colors: Vec<rerun::Color> = sphere
-                .reliability
-                .iter()
-                .step_by(4)
-                .map(|g| {
-                    let t = g.clamp(0.0, 1.0);
-                    rerun::Color::from_rgb(((1.0 - t) * 255.0) as u8, (t * 255.0) as u8, 40)
-                })
-                .collect();
-            let archetype = rerun::Points3D::new(positions).with_colors(colors).with_radii([0.006]);
-            let path = format!("{}/reliability", paths::object(object.id));
-            warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
+            let path = paths::of(Some(object.id), OwnerEntity::Reliability);
+            warn_on_error(
+                rerun.0.log(path.as_str(), &reliability_points(&reliability.0.sphere)),
+                &path,
+            );
         }
     }
+}
+
+/// A member's box in its NOCS frame, coloured by subcategory and labelled with its class,
+/// subcategory and whether it is the representative.
+fn aligned_box(id: ObjectId, membership: &Membership) -> rerun::Boxes3D {
+    let b = membership.member.nocs.oriented_box();
+    let (c, q) = (b.center(), b.world_from_box.rotation);
+    let [r, g, bl] = SUBCATEGORY_PALETTE[membership.subcategory % SUBCATEGORY_PALETTE.len()];
+    let rep = if membership.representative == id { " · rep" } else { "" };
+    let label = format!(
+        "{} · sub {}{rep}",
+        object_label(id, membership.class),
+        membership.subcategory
+    );
+    rerun::Boxes3D::from_centers_and_half_sizes(
+        [[c.x, c.y, c.z]],
+        [[b.half_extents.x, b.half_extents.y, b.half_extents.z]],
+    )
+    .with_quaternions([rerun::Quaternion::from_xyzw([q.i, q.j, q.k, q.w])])
+    .with_colors([rerun::Color::from_rgb(r, g, bl)])
+    .with_labels([label])
+}
+
+/// Every fourth point of an uncertainty sphere, coloured from red (reliability 0) to green (1).
+fn reliability_points(sphere: &catmap::categories::uncertainty::ObjectReliability) -> rerun::Points3D {
+    let positions = sphere.sphere_points.iter().step_by(4).map(|p| [p.x, p.y, p.z]);
+    let colors = sphere.reliability.iter().step_by(4).map(|g| {
+        let t = g.clamp(0.0, 1.0);
+        rerun::Color::from_rgb(((1.0 - t) * 255.0) as u8, (t * 255.0) as u8, 40)
+    });
+    rerun::Points3D::new(positions).with_colors(colors).with_radii([0.006])
 }
 
 /// Colours of subcategories 0, 1, 2, …

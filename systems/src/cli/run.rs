@@ -5,10 +5,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use catmap_systems::Mapper;
 
-use crate::cli_synth::{PresetArg, write_scene};
-use crate::run_plan::{DatasetFormat, MapMode, Recording, RunPlan};
+use crate::cli::run_plan::{DatasetFormat, MapMode, Recording, RunPlan};
+use crate::cli::synth::{PresetArg, write_scene};
 
 /// Arguments of `catmap run`.
 #[derive(clap::Args, Debug)]
@@ -115,7 +114,7 @@ pub enum Switch {
 /// Runs `catmap run` (or continues one with `--resume`).
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     if let Some(out) = &args.resume {
-        return crate::run_phases::resume(out);
+        return crate::cli::run_phases::resume(out);
     }
     let started = Instant::now();
     let config = config_from_args(args)?;
@@ -162,9 +161,12 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         }
     };
     std::fs::create_dir_all(&plan.out).with_context(|| format!("cannot create {}", plan.out.display()))?;
-    // The reader thread starts in `drive`, from the mapper's stream position.
-    let mapper = Mapper::with_inbox(config, crossbeam_channel::never())?;
-    crate::run_phases::drive(mapper, plan, Arc::clone(&source), started)
+    crate::cli::run_phases::drive(
+        crate::cli::run_phases::Start::Fresh(Box::new(config)),
+        plan,
+        Arc::clone(&source),
+        started,
+    )
 }
 
 /// The configuration: the config file (or the defaults) with the command line's overrides.

@@ -12,7 +12,7 @@ use catmap::metrics::{EvalSettings, EvaluationReport, GroundTruth, ObjectClasses
 use catmap_systems::Mapper;
 use catmap_systems::summary::{RunSummary, StepOutcome};
 
-use crate::run_plan::{Recording, RunPlan};
+use crate::cli::run_plan::{Recording, RunPlan};
 
 /// Writes every output of a finished mapper; errors only when the map's own outputs cannot be
 /// written.

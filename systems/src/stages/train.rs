@@ -4,14 +4,14 @@
 
 use bevy_ecs::prelude::*;
 use catmap::field::{
-    BACKGROUND_HIDDEN, OBJECT_HIDDEN, OccupancyField, RaySamplerConfig, RaySamples, SampleBatch, sample_training_rays,
+    BACKGROUND_HIDDEN, OBJECT_HIDDEN, OccupancyField, RaySamplerConfig, RaySamples, SampleBatch, sample_window_rays,
 };
 use catmap::rng::{RngStream, seeded_rng};
 use nalgebra::Point3;
 use rayon::prelude::*;
 
 use catmap::FrameIndex;
-use catmap::training::{FieldFacts, MeshSource, object_field_facts};
+use catmap::training::{BatchPlan, FieldFacts, MeshSource, StreamPhase, object_field_facts};
 
 use crate::components::{
     Background, CameraFrame, CategorySlot, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Object, ObjectBounds,
@@ -122,57 +122,31 @@ pub fn train_fields(
         return;
     }
     let _timer = times.start("train");
-    let config = &settings.0;
-    let cfg = &config.fields;
+    let (config, cfg, schedule, fields) = (&settings.0, &settings.0.fields, &mut *schedule, &mut *fields);
     let tick: Vec<FrameIndex> = frames.iter().map(|f| f.0.index).collect();
-    let phase = progress.phase();
-    let facts: Vec<(usize, FieldFacts)> = owners
-        .iter()
-        .filter_map(|(_, object, latest, member, _, slot, ..)| {
-            let mesh = if member {
-                MeshSource::CategoryField
-            } else {
-                MeshSource::OwnField
-            };
-            let facts = object_field_facts(object?.id, latest.map(LatestBox::last_seen), mesh, phase, &tick);
-            Some((slot.index, facts))
-        })
-        .collect();
-    let schedule = &mut *schedule;
+    let facts = object_facts(&owners, progress.phase(), &tick);
     let plan = schedule
         .scheduler
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
     schedule.planned_objects = plan.indices.len();
-    let fields = &mut *fields;
     for _ in 0..std::mem::take(&mut queue.pending) {
         if !plan.indices.is_empty() {
             match train_one(
                 &mut owners,
                 FieldOwner::Objects,
-                &plan.indices,
-                &plan.learning_rate_scales,
+                &plan,
                 &mut fields.objects,
                 &cfg.object_rays,
             ) {
-                Ok(losses) => {
-                    for (key, loss) in plan.keys.iter().zip(losses) {
-                        schedule.scheduler.record(*key, loss, &config.schedule.plateau);
-                    }
-                }
+                Ok(losses) => schedule
+                    .scheduler
+                    .record_step(&plan.keys, &losses, &config.schedule.plateau),
                 Err(e) => tracing::warn!(error = %e, "object training step skipped"),
             }
         }
-        let background_due = cfg.background_every > 0 && queue.steps_done.is_multiple_of(cfg.background_every as u64);
-        if background_due && !fields.background.is_empty() {
-            let losses = train_one(
-                &mut owners,
-                FieldOwner::Background,
-                &[0],
-                &[1.0],
-                &mut fields.background,
-                &cfg.background_rays,
-            );
-            if let Err(e) = losses {
+        if cfg.background_due(queue.steps_done) && !fields.background.is_empty() {
+            let (plan, batch) = (BatchPlan::background(), &mut fields.background);
+            if let Err(e) = train_one(&mut owners, FieldOwner::Background, &plan, batch, &cfg.background_rays) {
                 tracing::warn!(error = %e, "background training step skipped");
             }
         }
@@ -180,17 +154,29 @@ pub fn train_fields(
     }
 }
 
-/// One step of the fields `indices` (ascending; learning rates scaled by `scales`) of `batch`:
-/// samples their owners' rays (the background's, or the objects') in parallel, trains, and
+/// The step scheduler's facts of every object field (the background's are not planned).
+fn object_facts(owners: &FieldOwners, phase: StreamPhase, tick: &[FrameIndex]) -> Vec<(usize, FieldFacts)> {
+    owners
+        .iter()
+        .filter_map(|(_, object, latest, member, _, slot, ..)| {
+            let last_seen = latest.map(LatestBox::last_seen);
+            let mesh = MeshSource::of_category_member(member);
+            Some((slot.index, object_field_facts(object?.id, last_seen, mesh, phase, tick)))
+        })
+        .collect()
+}
+
+/// One step of the fields `plan` names (ascending indices in `batch`; learning rates scaled by
+/// its factors): samples their owners' rays (the background's, or the objects') in parallel, trains, and
 /// records each owner's losses; returns their total losses, in index order.
 fn train_one(
     owners: &mut FieldOwners,
     owner: FieldOwner,
-    indices: &[usize],
-    scales: &[f32],
+    plan: &BatchPlan,
     batch: &mut catmap::field::FieldBatch,
     rays: &RaySamplerConfig,
 ) -> catmap::Result<Vec<f32>> {
+    let indices = &plan.indices[..];
     let background = owner == FieldOwner::Background;
     let mut work: Vec<_> = owners
         .iter_mut()
@@ -209,13 +195,9 @@ fn train_one(
     }
     let fields: Vec<RaySamples> = work
         .par_iter_mut()
-        .map(|(keyframes, slot, rng, _)| {
-            let window = &keyframes.0;
-            let views: Vec<_> = window.slots().iter().map(|s| &s.data).collect();
-            sample_training_rays(&views, window.recent_slots(), &slot.origin, rays, &mut rng.0)
-        })
+        .map(|(keyframes, slot, rng, _)| sample_window_rays(&keyframes.0, &slot.origin, rays, &mut rng.0))
         .collect();
-    let losses = batch.train_step_scaled(indices, scales, &SampleBatch { fields })?;
+    let losses = batch.train_step_scaled(indices, &plan.learning_rate_scales, &SampleBatch { fields })?;
     for ((.., loss), latest) in work.iter_mut().zip(&losses) {
         loss.latest = *latest;
         loss.steps += 1;

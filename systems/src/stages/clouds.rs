@@ -1,9 +1,7 @@
 //! Cloud stage: observed point clouds grow with each frame, and oriented boxes follow them.
 
 use bevy_ecs::prelude::*;
-use catmap::ObjectId;
-use catmap::objects::object_bounds::{box_is_stale, fit_object_box};
-use catmap::objects::observed_cloud::ObservedCloud;
+use catmap::objects::object_bounds::refit_stale_boxes;
 use rayon::prelude::*;
 
 use crate::components::{Background, CameraFrame, FrameObservations, Object, ObjectBounds, ObjectCloud};
@@ -40,7 +38,7 @@ pub fn accumulate_clouds(
 
 /// Refits the oriented box of every object whose cloud has grown by more than
 /// `bounds_refresh_growth` since its last fit, and of every grown one when the stream ends
-/// (stale objects are fitted in parallel; results are written back in query order).
+/// (`catmap::objects::object_bounds::refit_stale_boxes`; results written back in query order).
 pub fn refresh_object_bounds(
     settings: Res<Settings>,
     progress: Res<StreamProgress>,
@@ -49,30 +47,15 @@ pub fn refresh_object_bounds(
     mut commands: Commands,
 ) {
     let _timer = times.start("bounds");
-    let cfg = &settings.0.objects;
-    let growth = if progress.ended.is_some() {
-        0.0
-    } else {
-        cfg.bounds_refresh_growth
-    };
-    let stale: Vec<(Entity, ObjectId, &ObservedCloud)> = objects
+    let clouds = objects
         .iter()
-        .filter(|(_, _, cloud, bounds)| box_is_stale(bounds.map(|b| b.fitted_at_points), cloud.0.len(), growth))
-        .map(|(entity, object, cloud, _)| (entity, object.id, &cloud.0))
-        .collect();
-    let fits: Vec<(Entity, ObjectId, catmap::Result<ObjectBounds>)> = stale
-        .into_par_iter()
-        .map(|(entity, id, cloud)| {
-            let fitted = fit_object_box(cloud, cfg).map(|oriented_box| ObjectBounds {
-                oriented_box,
-                fitted_at_points: cloud.len(),
-            });
-            (entity, id, fitted)
-        })
-        .collect();
-    for (entity, id, fitted) in fits {
+        .map(|(entity, object, cloud, bounds)| ((entity, object.id), bounds.map(|b| b.fitted_at_points), &cloud.0));
+    for ((entity, id), fitted) in refit_stale_boxes(clouds, progress.phase(), &settings.0.objects) {
         let fitted = match fitted {
-            Ok(fitted) => fitted,
+            Ok((oriented_box, fitted_at_points)) => ObjectBounds {
+                oriented_box,
+                fitted_at_points,
+            },
             Err(e) => {
                 tracing::warn!(object = %id, error = %e, "cannot fit an oriented box yet");
                 continue;

@@ -1,8 +1,8 @@
 //! Track stage: object entities appear for new instance ids and take in each frame's view of them.
 
 use bevy_ecs::prelude::*;
-use catmap::objects::frame_observation::majority_class;
-use catmap::objects::keyframes::{Admission, KeyframeRole};
+use catmap::objects::frame_observation::add_class_votes;
+use catmap::objects::keyframes::KeyframeRole;
 use catmap::objects::object_view::{ObjectView, ViewOwner};
 use catmap::objects::observed_cloud::ObservedCloud;
 use catmap::rng::{RngStream, seeded_rng};
@@ -24,28 +24,18 @@ pub fn spawn_new_objects(
     let config = &settings.0;
     for (frame, observations) in &frames {
         for (&id, observation) in &observations.0.objects {
+            let Some(class) = observation.majority_class() else {
+                continue; // no pixels (the observer never makes such an observation)
+            };
             if index.0.contains_key(&id) {
                 continue;
             }
-            let class = majority_class(
-                &observation
-                    .class_votes
-                    .iter()
-                    .map(|(&c, &n)| (c, u64::from(n)))
-                    .collect(),
-            )
-            .expect("an observed object has at least one pixel");
             let entity = commands
                 .spawn((
                     Object { id },
                     ObjectClass(class),
                     ClassVotes::default(),
-                    LatestBox {
-                        frame: frame.0.index,
-                        tight: observation.tight_box,
-                        sample: observation.sample_box,
-                        became_keyframe: false,
-                    },
+                    LatestBox::of(frame.0.index, observation, None),
                     Keyframes::default(),
                     VisibleFrames::default(),
                     ObjectCloud(ObservedCloud::new(config.objects.cloud_voxel_m)),
@@ -58,20 +48,27 @@ pub fn spawn_new_objects(
     }
 }
 
-/// Adds each new frame's view of an object: class votes, latest 2D box, visible-frame count and
-/// keyframe window.
+/// The per-object state a new view updates.
+type ViewedObjects<'w, 's> = Query<
+    'w,
+    's,
+    (
+        &'static mut ClassVotes,
+        &'static mut ObjectClass,
+        &'static mut LatestBox,
+        &'static mut Keyframes,
+        &'static mut VisibleFrames,
+        &'static mut ObjectRng,
+    ),
+>;
+
+/// Adds each new frame's view of an object: class votes (the class follows the majority),
+/// latest 2D box, visible-frame count and keyframe window.
 pub fn record_object_views(
     settings: Res<Settings>,
     frames: Query<(&CameraFrame, &FrameObservations), Added<FrameObservations>>,
     index: Res<ObjectIndex>,
-    mut objects: Query<(
-        &mut ClassVotes,
-        &mut ObjectClass,
-        &mut LatestBox,
-        &mut Keyframes,
-        &mut VisibleFrames,
-        &mut ObjectRng,
-    )>,
+    mut objects: ViewedObjects,
     mut times: ResMut<StageTimes>,
 ) {
     let _timer = times.start("objects");
@@ -83,34 +80,16 @@ pub fn record_object_views(
                 tracing::warn!(object = %id, "observed object has no entity");
                 continue;
             };
-            for (&c, &n) in &observation.class_votes {
-                *votes.0.entry(c).or_insert(0) += u64::from(n);
-            }
-            if let Some(majority) = majority_class(&votes.0) {
+            if let Some(majority) = add_class_votes(&mut votes.0, &observation.class_votes) {
                 class.set_if_neq(ObjectClass(majority));
             }
             visible.0 += 1;
             let view = ObjectView::crop(&frame.0, observation.sample_box, ViewOwner::Object(*id));
-            let admission = keyframes.0.offer(
-                frame.0.index,
-                view,
-                KeyframeRole::Object,
-                &settings.0.keyframes,
-                &mut rng.0,
-            );
-            *latest = LatestBox {
-                frame: frame.0.index,
-                tight: observation.tight_box,
-                sample: observation.sample_box,
-                became_keyframe: admission.is_keyframe(),
-            };
-            if let Admission::Overwrote {
-                replaced,
-                keyframe: true,
-            } = admission
-            {
-                tracing::trace!(object = %id, ?replaced, "keyframe window full, slot replaced");
-            }
+            let keyframes_cfg = &settings.0.keyframes;
+            let admission = keyframes
+                .0
+                .offer(frame.0.index, view, KeyframeRole::Object, keyframes_cfg, &mut rng.0);
+            *latest = LatestBox::of(frame.0.index, observation, Some(admission));
         }
     }
 }

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
 
-use crate::progress::bar;
+use crate::cli::progress::bar;
 
 /// Arguments of `catmap synth`.
 #[derive(clap::Args, Debug)]

@@ -1,0 +1,12 @@
+//! The `catmap` binary's own modules: one per subcommand (`run`, `synth`, `eval`, `compare`), and
+//! what `run` is made of — the run plan (what was asked, saved in checkpoints), its phases with
+//! checkpoints (`run_phases`), the files it writes (`run_outputs`) and progress bars.
+
+pub mod compare;
+pub mod eval;
+pub mod progress;
+pub mod run;
+pub mod run_outputs;
+pub mod run_phases;
+pub mod run_plan;
+pub mod synth;

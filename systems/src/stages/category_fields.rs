@@ -1,0 +1,120 @@
+//! Category phase (`catmap run --mode category`): once the classes are registered, every
+//! subcategory with more than one member gets one category field (METHOD.md §5) whose members
+//! are its objects, each sampled in its own NOCS frame; all category fields train as one batch
+//! (`catmap::categories::field_set`). Single-member subcategories keep their per-object fields.
+
+use bevy_ecs::prelude::*;
+use catmap::FrameIndex;
+use catmap::categories::field_set::MemberRays;
+use catmap::field::{RaySamplerConfig, sample_window_rays};
+use rayon::prelude::*;
+
+use crate::components::{CameraFrame, CategorySlot, FieldRng, FieldSlot, Keyframes, LatestBox, Object, Subcategories};
+use crate::resources::{CategoryFields, Settings, StageTimes, StreamProgress, TrainingSchedule};
+
+/// Keeps one category field per multi-member subcategory whenever a registration changed
+/// (`CategoryFieldSet::follow`: fields continue under a new membership, members keep their
+/// codes where they can); every member's slot follows its place and latest NOCS frame.
+pub fn sync_category_fields(
+    settings: Res<Settings>,
+    mut fields: ResMut<CategoryFields>,
+    categories: Query<Ref<Subcategories>>,
+    objects: Query<(Entity, &Object, Option<&CategorySlot>)>,
+    mut commands: Commands,
+) {
+    let cfg = &settings.0.category_fields;
+    if !cfg.enabled || !categories.iter().any(|s| s.is_changed()) {
+        return;
+    }
+    let registered: Vec<_> = categories.iter().collect();
+    let places = fields.follow(registered.iter().flat_map(|s| &s.groups), settings.0.seed, cfg.code_dim);
+    for (entity, object, slot) in &objects {
+        match places.get(&object.id) {
+            Some(place) if slot.map(|s| &s.0) != Some(place) => {
+                commands.entity(entity).insert(CategorySlot(*place));
+            }
+            None if slot.is_some() => {
+                commands.entity(entity).remove::<CategorySlot>();
+            }
+            _ => {}
+        }
+    }
+}
+
+/// The members of category fields: their keyframes, slots, generators and latest sightings.
+type Members<'w, 's> = Query<
+    'w,
+    's,
+    (
+        &'static Keyframes,
+        &'static FieldSlot,
+        &'static CategorySlot,
+        &'static LatestBox,
+        &'static mut FieldRng,
+    ),
+>;
+
+/// Runs the queued steps of the category fields the step scheduler plans for this tick: every
+/// member of a planned field samples its rays from its keyframes (members in parallel, each from
+/// its own generator), and the planned fields train in one batched step.
+pub fn train_category_fields(
+    settings: Res<Settings>,
+    mut fields: ResMut<CategoryFields>,
+    mut schedule: ResMut<TrainingSchedule>,
+    frames: Query<&CameraFrame>,
+    progress: Res<StreamProgress>,
+    mut members: Members,
+    objects: Query<(), (With<Object>, With<FieldSlot>)>,
+    mut times: ResMut<StageTimes>,
+) {
+    let (config, schedule) = (&settings.0, &mut *schedule);
+    schedule.planned_categories = 0;
+    let pending = std::mem::take(&mut fields.pending);
+    if pending == 0 || fields.members.is_empty() {
+        return;
+    }
+    let _timer = times.start("category_train");
+    let tick: Vec<FrameIndex> = frames.iter().map(|f| f.0.index).collect();
+    let seen = members
+        .iter()
+        .map(|(.., slot, latest, _)| (slot.field, latest.last_seen()));
+    let facts = fields.facts(seen, progress.phase(), &tick);
+    let plan = schedule
+        .scheduler
+        .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
+    schedule.planned_categories = plan.indices.len();
+    let rays = fields.member_rays(
+        objects.iter().count(),
+        &config.category_fields,
+        &config.fields.object_rays,
+    );
+    for _ in 0..pending {
+        if plan.indices.is_empty() {
+            continue;
+        }
+        let sampled = sample_members(&mut members, &plan.indices, &rays);
+        match fields.train_step(&plan, sampled) {
+            Ok(losses) => schedule
+                .scheduler
+                .record_step(&plan.keys, &losses, &config.schedule.plateau),
+            Err(e) => tracing::warn!(error = %e, "category training step skipped"),
+        }
+        fields.steps_done += 1;
+    }
+}
+
+/// The rays of every member of the `active` fields for one step, each drawn from its own
+/// keyframes and generator with its field's settings `rays` (members in parallel).
+fn sample_members(members: &mut Members, active: &[usize], rays: &[RaySamplerConfig]) -> Vec<MemberRays> {
+    let mut work: Vec<_> = members
+        .iter_mut()
+        .filter(|(_, _, slot, ..)| active.binary_search(&slot.field).is_ok())
+        .collect();
+    work.par_iter_mut()
+        .map(|(keyframes, field_slot, slot, _, rng)| MemberRays {
+            place: slot.0,
+            origin: field_slot.origin,
+            rays: sample_window_rays(&keyframes.0, &field_slot.origin, &rays[slot.field], &mut rng.0),
+        })
+        .collect()
+}

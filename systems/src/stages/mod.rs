@@ -1,0 +1,29 @@
+//! The systems, one file per stage of the schedule (`crate::schedule` orders them). Each reads
+//! components, calls one `catmap::` function and writes components back.
+//!
+//! | stage | file |
+//! |---|---|
+//! | frames leave the stream | `ingest` |
+//! | masks become per-object observations | `segment` |
+//! | objects appear and take in their views (class votes, keyframes) | `track` |
+//! | observed clouds grow, oriented boxes follow | `clouds` |
+//! | objects join their class's category | `categorize` |
+//! | fields appear and train (object fields, background) | `train` |
+//! | classes are registered, subcategories split | `register` |
+//! | category fields follow the subcategories and train | `category_fields` |
+//! | fields are meshed (previews, final) | `meshes` |
+//! | what changed is logged to Rerun | `log_rerun`, `log_categories` |
+//! | the frame's entity is despawned | `cleanup` |
+
+pub mod categorize;
+pub mod category_fields;
+pub mod cleanup;
+pub mod clouds;
+pub mod ingest;
+pub mod log_categories;
+pub mod log_rerun;
+pub mod meshes;
+pub mod register;
+pub mod segment;
+pub mod track;
+pub mod train;
