@@ -8,6 +8,7 @@ mod common;
 use std::collections::BTreeMap;
 
 use catmap::config::FieldConfig;
+use catmap::training::SchedulePolicy;
 use catmap::dataset::FrameSource;
 use catmap::metrics::{Crop, score_object};
 use catmap::rng::{RngStream, seeded_rng};
@@ -33,6 +34,9 @@ fn completion_per_object(
         ..MapperConfig::default()
     };
     config.meshes.object.voxel_size_m = 0.01;
+    // The paper's fixed protocol, so that both modes train exactly the steps compared (the fast
+    // schedule would train every field until it converges, in one phase).
+    config.schedule.policy = SchedulePolicy::Paper;
     config.category_fields.enabled = category_steps > 0; // instance mode without category steps
     if category_steps > 0 {
         config.categories.enabled = true;

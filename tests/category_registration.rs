@@ -8,6 +8,7 @@ mod common;
 use std::collections::{BTreeMap, BTreeSet};
 
 use catmap::config::FieldConfig;
+use catmap::training::SchedulePolicy;
 use catmap::dataset::FrameSource;
 use catmap::registration::cube_rotations;
 use catmap::synth::{Preset, SyntheticScene};
@@ -26,6 +27,9 @@ fn map_default_scene() -> (SyntheticScene, Vec<ClassRecord>, BTreeMap<String, f6
         },
         ..MapperConfig::default()
     };
+    // The paper's fixed protocol: exactly the 1 500 steps (the fast schedule trains until the
+    // fields converge).
+    config.schedule.policy = SchedulePolicy::Paper;
     config.categories.enabled = true;
     config.category_fields.enabled = false; // registration only
     let mut mapper = common::mapping::map_scene(&scene, (0..scene.len()).step_by(2), config);
