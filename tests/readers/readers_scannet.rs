@@ -6,8 +6,7 @@ use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
 use catmap::{CameraIntrinsics, ClassId, FrameIndex, InstanceLabel, ObjectId};
 use tempfile::TempDir;
 
-mod common;
-use common::{assert_mentions, pixel, write_grey8, write_grey16, write_rgb};
+use crate::common::{assert_mentions, pixel, write_grey8, write_grey16, write_rgb};
 
 // and 5, where 5 has lost tracking.
 const SW: u32 = 48;

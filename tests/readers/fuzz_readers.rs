@@ -8,13 +8,16 @@
 //! frame that is inconsistent or holds a NaN. A long run, with the per-target report:
 //!
 //! ```text
-//! CATMAP_FUZZ_SECONDS=600 cargo test --test fuzz_readers -- --nocapture --test-threads 1
+//! CATMAP_FUZZ_SECONDS=600 cargo test --test readers fuzz_readers -- --nocapture --test-threads 1
 //! ```
-
-mod fuzz_support;
 
 use std::path::Path;
 
+use crate::fuzz_support::checks::check_pose;
+use crate::fuzz_support::fixtures::{Folder, replica_files, rgb_image, scannet_files};
+use crate::fuzz_support::mutate::{mutate_bytes, mutate_text, random_text};
+use crate::fuzz_support::png::{generate_png, mutate_png};
+use crate::fuzz_support::{Execution, Verdict, fuzz, pick, rejected_naming};
 use catmap::MapperConfig;
 use catmap::dataset::FrameSource;
 use catmap::dataset::camera_spec::{
@@ -25,11 +28,6 @@ use catmap::dataset::images::{Image, grey_from_bytes, grey_from_bytes_as, grey16
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
 use catmap::dataset::resize::{resize_bilinear_rgb, resize_nearest};
 use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
-use fuzz_support::checks::check_pose;
-use fuzz_support::fixtures::{Folder, replica_files, rgb_image, scannet_files};
-use fuzz_support::mutate::{mutate_bytes, mutate_text, random_text};
-use fuzz_support::png::{generate_png, mutate_png};
-use fuzz_support::{Execution, Verdict, fuzz, pick, rejected_naming};
 use image::ImageFormat;
 use nalgebra::{Rotation3, Vector3};
 use rand::RngExt;
@@ -47,8 +45,8 @@ fn png_seeds() -> Vec<Vec<u8>> {
     let size = (7, 5);
     let f = |u: u32, v: u32| (u * 37 + v * 11) as u8;
     let mut seeds = vec![
-        fuzz_support::fixtures::grey8_png(size, f),
-        fuzz_support::fixtures::grey16_png(size, |u, v| 1000 + (u * 300 + v) as u16),
+        crate::fuzz_support::fixtures::grey8_png(size, f),
+        crate::fuzz_support::fixtures::grey16_png(size, |u, v| 1000 + (u * 300 + v) as u16),
         rgb_image(size, ImageFormat::Png, |u, v| [f(u, v), 3, 200]),
         rgb_image(size, ImageFormat::Jpeg, |u, v| [f(u, v), 90, 20]),
     ];

@@ -3,15 +3,13 @@
 //! categories on; then the subcategories and the aligned boxes are checked against the scene's
 //! truth, and the representatives' observed surface fractions are printed.
 
-mod common;
-
 use std::collections::{BTreeMap, BTreeSet};
 
 use catmap::config::FieldConfig;
-use catmap::training::SchedulePolicy;
 use catmap::dataset::FrameSource;
 use catmap::registration::cube_rotations;
 use catmap::synth::{Preset, SyntheticScene};
+use catmap::training::SchedulePolicy;
 use catmap::{MapperConfig, ObjectId};
 use catmap_systems::categories_report::ClassRecord;
 use nalgebra::{Matrix3, Matrix4, Point3};
@@ -32,7 +30,7 @@ fn map_default_scene() -> (SyntheticScene, Vec<ClassRecord>, BTreeMap<String, f6
     config.schedule.policy = SchedulePolicy::Paper;
     config.categories.enabled = true;
     config.category_fields.enabled = false; // registration only
-    let mut mapper = common::mapping::map_scene(&scene, (0..scene.len()).step_by(2), config);
+    let mut mapper = crate::common::mapping::map_scene(&scene, (0..scene.len()).step_by(2), config);
     let records = mapper.category_records();
     let stages = mapper.stage_seconds();
     (scene, records, stages)

@@ -5,20 +5,18 @@
 //! Layout: `png/NAME` is decoded on its own as RGB, 8-bit grey and 16-bit grey; `config/NAME` is
 //! loaded as a config file; `replica/SLOT/NAME` and `scannet/SLOT/NAME` replace the file `SLOT`
 //! (e.g. `traj_w_c.txt`, `pose/0.txt`) of a small valid dataset folder, which is then opened and
-//! read frame by frame. Inputs the fuzzers (`tests/fuzz_readers.rs`) found are kept here with the
+//! read frame by frame. Inputs the fuzzers (`tests/readers/fuzz_readers.rs`) found are kept here with the
 //! iteration that found them in their name.
-
-mod fuzz_support;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use crate::fuzz_support::fixtures::{FileSet, Folder, FolderEdit, replica_files, scannet_files};
 use catmap::MapperConfig;
 use catmap::dataset::FrameSource;
 use catmap::dataset::images::{grey_from_bytes, grey16_from_bytes, rgb_from_bytes};
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
 use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
-use fuzz_support::fixtures::{FileSet, Folder, FolderEdit, replica_files, scannet_files};
 
 fn corpus_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/corpus")

@@ -3,16 +3,14 @@
 //! better (lower completion distance; measured 3.23 → 3.10 cm with these short runs — the
 //! default scene's figures are in the README), and objects outside category fields are unchanged.
 
-mod common;
-
 use std::collections::BTreeMap;
 
 use catmap::config::FieldConfig;
-use catmap::training::SchedulePolicy;
 use catmap::dataset::FrameSource;
 use catmap::metrics::{Crop, score_object};
 use catmap::rng::{RngStream, seeded_rng};
 use catmap::synth::{Preset, SyntheticScene};
+use catmap::training::SchedulePolicy;
 use catmap::{MapperConfig, ObjectId};
 
 const SEED: u64 = 5;
@@ -42,7 +40,7 @@ fn completion_per_object(
         config.categories.enabled = true;
         config.category_fields.iterations = category_steps;
     }
-    let mut mapper = common::mapping::map_scene(scene, 0..scene.len(), config);
+    let mut mapper = crate::common::mapping::map_scene(scene, 0..scene.len(), config);
     let fields = mapper.category_field_count();
     assert_eq!(
         fields,

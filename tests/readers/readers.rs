@@ -10,8 +10,7 @@ use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
 use catmap::{CameraIntrinsics, CatmapError, ClassId, FrameIndex, InstanceLabel, ObjectId};
 use tempfile::TempDir;
 
-mod common;
-use common::{assert_mentions, pixel, write_grey8, write_grey16, write_rgb};
+use crate::common::{assert_mentions, pixel, write_grey8, write_grey16, write_rgb};
 
 const W: u32 = 32;
 const H: u32 = 24;

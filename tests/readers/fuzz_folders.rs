@@ -3,21 +3,19 @@
 //! turned into a folder; every frame is read. Same harness and settings as `fuzz_readers.rs`:
 //!
 //! ```text
-//! CATMAP_FUZZ_SECONDS=600 cargo test --test fuzz_folders -- --nocapture --test-threads 1
+//! CATMAP_FUZZ_SECONDS=600 cargo test --test readers fuzz_folders -- --nocapture --test-threads 1
 //! ```
-
-mod fuzz_support;
 
 use std::path::Path;
 
+use crate::fuzz_support::checks::check_frame;
+use crate::fuzz_support::fixtures::{FileSet, Folder, FolderEdit, replica_files, scannet_files};
+use crate::fuzz_support::mutate::{mutate_bytes, mutate_text};
+use crate::fuzz_support::png::{generate_png, mutate_png};
+use crate::fuzz_support::{Execution, Verdict, fuzz, pick, rejected_naming};
 use catmap::dataset::FrameSource;
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
 use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
-use fuzz_support::checks::check_frame;
-use fuzz_support::fixtures::{FileSet, Folder, FolderEdit, replica_files, scannet_files};
-use fuzz_support::mutate::{mutate_bytes, mutate_text};
-use fuzz_support::png::{generate_png, mutate_png};
-use fuzz_support::{Execution, Verdict, fuzz, pick, rejected_naming};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
