@@ -18,7 +18,7 @@ use candle_core::DType;
 use catmap::field::category::reference::category_reference;
 use catmap::field::{
     AdamWConfig, Backend, CategoryBatch, CategoryField, CategorySamples, FieldBatch, GEO_DIMS, OccupancyField,
-    RaySamples, SampleBatch,
+    RaySamples,
 };
 use catmap::ids::ObjectId;
 use catmap::rng::{RngStream, seeded_rng};
@@ -110,13 +110,11 @@ fn run(args: &Args) -> anyhow::Result<()> {
     ));
 
     let mut objects = FieldBatch::new(AdamWConfig::default());
-    let mut object_samples = SampleBatch::default();
+    let mut object_samples = Vec::<RaySamples>::new();
     for i in 0..c * m {
         let mut rng = seeded_rng(args.seed, RngStream::ObjectField(ObjectId(i as u32)));
         objects.push(OccupancyField::new(32, 2.0, &mut rng));
-        object_samples
-            .fields
-            .push(RaySamples::random(&mut rng, rays, 10, 2.0, 0.0));
+        object_samples.push(RaySamples::random(&mut rng, rays, 10, 2.0, 0.0));
     }
     let instance = steps_per_second(args.seconds, || {
         objects.train_step(&object_samples).context("train step")?;

@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use candle_core::{Device, Tensor};
 use catmap::field::reference::CandleMlpBatch;
-use catmap::field::{AdamWConfig, Backend, FieldBatch, GEO_DIMS, MlpBatch, OccupancyField, RaySamples, SampleBatch};
+use catmap::field::{AdamWConfig, Backend, FieldBatch, GEO_DIMS, MlpBatch, OccupancyField, RaySamples};
 use catmap::ids::ObjectId;
 use catmap::rng::{RngStream, seeded_rng};
 use clap::Parser;
@@ -145,17 +145,15 @@ fn bench_mlp(args: &Args) -> anyhow::Result<()> {
 fn bench_vmap(args: &Args, background_rays: usize) -> anyhow::Result<()> {
     let (objects, rays) = (16, 120);
     let mut batch = FieldBatch::new(AdamWConfig::default());
-    let mut samples = SampleBatch::default();
+    let mut samples = Vec::<RaySamples>::new();
     for i in 0..objects {
         let mut rng = seeded_rng(args.seed, RngStream::Object(ObjectId(i)));
         batch.push(OccupancyField::new(32, 2.0, &mut rng));
-        samples.fields.push(RaySamples::random(&mut rng, rays, 10, 2.0, 0.0));
+        samples.push(RaySamples::random(&mut rng, rays, 10, 2.0, 0.0));
     }
     let mut rng = seeded_rng(args.seed, RngStream::Background);
     batch.push(OccupancyField::new(128, 5.0, &mut rng));
-    samples
-        .fields
-        .push(RaySamples::random(&mut rng, background_rays, 14, 2.0, 0.0));
+    samples.push(RaySamples::random(&mut rng, background_rays, 14, 2.0, 0.0));
     let flops = objects as f64 * field_step_flops(32, rays * 10) + field_step_flops(128, background_rays * 14);
     let rate = steps_per_second(args.seconds, || {
         batch.train_step(&samples).context("train step")?;
@@ -174,11 +172,11 @@ fn bench_subsets(args: &Args) -> anyhow::Result<()> {
     let rays = 120;
     for objects in [1usize, 2, 4, 8, 16] {
         let mut batch = FieldBatch::new(AdamWConfig::default());
-        let mut samples = SampleBatch::default();
+        let mut samples = Vec::<RaySamples>::new();
         for i in 0..objects {
             let mut rng = seeded_rng(args.seed, RngStream::Object(ObjectId(i as u32)));
             batch.push(OccupancyField::new(32, 2.0, &mut rng));
-            samples.fields.push(RaySamples::random(&mut rng, rays, 10, 2.0, 0.0));
+            samples.push(RaySamples::random(&mut rng, rays, 10, 2.0, 0.0));
         }
         let flops = objects as f64 * field_step_flops(32, rays * 10);
         let rate = steps_per_second(args.seconds, || {

@@ -56,7 +56,7 @@ impl FieldLosses {
 
 /// The reciprocal mask counts of one field (0 where the mask is empty).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct LossNorm {
+pub struct LossNorm {
     depth: f32,
     colour: f32,
     opacity: f32,

@@ -14,10 +14,12 @@
 //! | `layout` | named flat parameters, initialisation |
 //! | `render` | occupancy rendering of a ray and its backward |
 //! | `loss` | vMAP's depth / colour / opacity loss |
+//! | `chunk_loss` | a chunk's render, loss and head gradients (shared by every network) |
 //! | `adamw` | PyTorch AdamW, per-field state |
 //! | `gemm`, `simd`, `dense` | SIMD GEMM micro-kernels and packed linear layers |
 //! | `occupancy` | the occupancy MLP on a chunk (fused forward + backward) |
-//! | `object_field`, `batch`, `tasks`, `samples` | fields, the batched step, its parallel plan |
+//! | `fused_batch`, `tasks` | the one fused training step of any batch of fields, its parallel plan |
+//! | `object_field`, `batch`, `samples` | the occupancy field and its batch ([`FieldBatch`]) |
 //! | `ray_sampler` | the depth-guided sampler: keyframes, pixels, depths along rays |
 //! | `tensors` | parameters as named candle tensors |
 //! | `category` | the CodeNeRF-style category field (shared weights, per-member codes), batched |
@@ -26,10 +28,12 @@
 mod adamw;
 mod batch;
 pub mod category;
+mod chunk_loss;
 mod config;
 mod dense;
 mod directions;
 mod encoding;
+mod fused_batch;
 mod gemm;
 mod layout;
 mod loss;
@@ -45,11 +49,12 @@ mod tasks;
 mod tensors;
 
 pub use adamw::{AdamWConfig, AdamWState};
-pub use batch::{CHUNK_SAMPLES, FieldBatch};
-pub use category::{CategoryBatch, CategoryField, CategoryGradients, CategoryLosses, CategorySamples};
+pub use batch::{FieldBatch, OccupancyModel};
+pub use category::{CategoryBatch, CategoryField, CategoryGradients, CategoryLosses, CategoryModel, CategorySamples};
 pub use config::FieldConfig;
 pub use directions::{NUM_DIRECTIONS, icosphere_directions};
 pub use encoding::{COL_DIMS, EMB_DIMS, GEO_DIMS, NUM_BANDS, SIN_DIMS};
+pub use fused_batch::{CHUNK_SAMPLES, FieldStep, FusedBatch, FusedModel};
 pub use layout::{InitKind, ParamLayout, TensorSpec};
 pub use loss::{COLOUR_WEIGHT, DEPTH_STD_EPS, FieldLosses, OPACITY_WEIGHT};
 pub use mlp::MlpBatch;
@@ -57,5 +62,5 @@ pub use object_field::{BACKGROUND_HIDDEN, FieldEval, OBJECT_HIDDEN, OccupancyFie
 pub use occupancy::ALPHA_SCALE;
 pub use ray_sampler::{RaySamplerConfig, choose_step_views, sample_training_rays, sample_window_rays};
 pub use render::{FREE_EPS, RayRender, RenderGrad, render_ray, render_ray_backward, sigmoid};
-pub use samples::{RaySamples, SampleBatch};
+pub use samples::RaySamples;
 pub use simd::Backend;

@@ -96,10 +96,3 @@ impl RaySamples {
         out
     }
 }
-
-/// The samples of one training step: one [`RaySamples`] per field, in the batch's field order.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct SampleBatch {
-    /// Per-field rays.
-    pub fields: Vec<RaySamples>,
-}

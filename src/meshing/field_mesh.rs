@@ -90,7 +90,7 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::field::{AdamWConfig, FieldBatch, RaySamples, SampleBatch};
+    use crate::field::{AdamWConfig, FieldBatch, RaySamples};
     use crate::objects::object_view::PixelState;
 
     /// Rays along +z from z = −1 hitting a plane at z = 0 (in the field frame), over a 0.4 m square.
@@ -127,9 +127,7 @@ mod tests {
         });
         batch.push(OccupancyField::new(32, 2.0, &mut rng));
         for _ in 0..300 {
-            let samples = SampleBatch {
-                fields: vec![plane_rays(&mut rng)],
-            };
+            let samples = vec![plane_rays(&mut rng)];
             batch.train_step(&samples).expect("train");
         }
         let origin = Point3::new(3.0, 0.0, 0.0);

@@ -4,7 +4,7 @@
 //! high g). Rays into the never-seen +x half are printed (the issue expects medium u, low g).
 
 use catmap::categories::uncertainty::{UncertaintyConfig, ray_uncertainty, reliability};
-use catmap::field::{AdamWConfig, FieldBatch, OBJECT_HIDDEN, OccupancyField, RaySamples, SampleBatch};
+use catmap::field::{AdamWConfig, FieldBatch, OBJECT_HIDDEN, OccupancyField, RaySamples};
 use catmap::objects::object_view::PixelState;
 use catmap::rng::{RngStream, seeded_rng, standard_normal_f32};
 use nalgebra::{Point3, Vector3};
@@ -78,9 +78,7 @@ fn trained_surface_is_certain_empty_space_is_certain_and_the_unseen_half_is_not(
     batch.push(OccupancyField::new(OBJECT_HIDDEN, 1.0, &mut rng));
     for _ in 0..1500 {
         let rays = half_seen_rays(&mut rng, 240);
-        batch
-            .train_step(&SampleBatch { fields: vec![rays] })
-            .expect("valid rays");
+        batch.train_step(&[rays]).expect("valid rays");
     }
     let field = batch.field(0).expect("one field");
     let cfg = UncertaintyConfig::default();

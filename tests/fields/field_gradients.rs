@@ -4,7 +4,7 @@
 
 use candle_core::DType;
 use catmap::field::reference::{mlp_reference, occupancy_reference};
-use catmap::field::{AdamWConfig, Backend, FieldBatch, MlpBatch, OccupancyField, ParamLayout, RaySamples, SampleBatch};
+use catmap::field::{AdamWConfig, Backend, FieldBatch, MlpBatch, OccupancyField, ParamLayout, RaySamples};
 use catmap::ids::ObjectId;
 use catmap::rng::{RngStream, seeded_rng};
 use rand::RngExt;
@@ -54,16 +54,14 @@ fn setup(
     rays: usize,
     samples_per_ray: usize,
     backend: Backend,
-) -> (FieldBatch, SampleBatch) {
+) -> (FieldBatch, Vec<RaySamples>) {
     let mut batch = FieldBatch::with_backend(AdamWConfig::default(), backend);
-    let mut samples = SampleBatch::default();
+    let mut samples = Vec::<RaySamples>::new();
     for (i, &h) in hidden.iter().enumerate() {
         let mut rng = seeded_rng(seed, RngStream::Object(ObjectId(i as u32)));
         let scale = if h >= 128 { 5.0 } else { 2.0 };
         batch.push(well_conditioned(OccupancyField::new(h, scale, &mut rng)));
-        samples
-            .fields
-            .push(RaySamples::random(&mut rng, rays, samples_per_ray, 1.5, 0.15));
+        samples.push(RaySamples::random(&mut rng, rays, samples_per_ray, 1.5, 0.15));
     }
     (batch, samples)
 }
@@ -72,14 +70,8 @@ fn check_against_candle(seed: u64, hidden: &[usize], rays: usize, samples_per_ra
     let (mut batch, samples) = setup(seed, hidden, rays, samples_per_ray, backend);
     let (losses, grads) = batch.loss_and_gradients(&samples).expect("shapes agree");
     for (f, field) in batch.fields().iter().enumerate() {
-        let reference = occupancy_reference(
-            field.hidden(),
-            field.scale(),
-            field.params(),
-            &samples.fields[f],
-            DType::F64,
-        )
-        .expect("candle runs");
+        let reference = occupancy_reference(field.hidden(), field.scale(), field.params(), &samples[f], DType::F64)
+            .expect("candle runs");
         let l = losses[f];
         let close = |a: f32, b: f64| (f64::from(a) - b).abs() <= 1e-4 * b.abs().max(1e-2);
         assert!(
@@ -128,8 +120,8 @@ fn every_simd_backend_matches_candle_autograd() {
 fn forward_renders_match_candle() {
     let (batch, samples) = setup(5, &[32], 40, 10, Backend::detect());
     let field = &batch.fields()[0];
-    let renders = field.render_rays(&samples.fields[0]).expect("valid rays");
-    let reference = occupancy_reference(32, 2.0, field.params(), &samples.fields[0], DType::F64).expect("candle runs");
+    let renders = field.render_rays(&samples[0]).expect("valid rays");
+    let reference = occupancy_reference(32, 2.0, field.params(), &samples[0], DType::F64).expect("candle runs");
     for (r, got) in renders.iter().enumerate() {
         let close = |a: f32, b: f64| (f64::from(a) - b).abs() < 1e-5 * b.abs().max(1.0);
         assert!(
@@ -177,7 +169,7 @@ fn adding_a_field_keeps_the_others_optimiser_state() {
     let moments = batch.fields()[0].optimiser_state().clone();
     let mut rng = seeded_rng(7, RngStream::Object(ObjectId(99)));
     batch.push(OccupancyField::new(32, 2.0, &mut rng));
-    samples.fields.push(RaySamples::random(&mut rng, 8, 10, 1.5, 0.15));
+    samples.push(RaySamples::random(&mut rng, 8, 10, 1.5, 0.15));
     assert_eq!(
         batch.fields()[0].optimiser_state(),
         &moments,

@@ -35,7 +35,7 @@
 //! | `net` | packed layers, the per-member code table, the forward pass |
 //! | `train` | the fused forward + render + loss + backward of a chunk |
 //! | `model` | [`CategoryField`]: weights, codes, optimiser states, evaluation |
-//! | `batch` | [`CategoryBatch`]: many categories in one fused step |
+//! | `batch` | [`CategoryBatch`]: the category network in the fused step |
 //! | `tensors` | weights and codes as named candle tensors |
 //! | `reference` | the same model in candle autograd |
 
@@ -48,7 +48,7 @@ pub mod reference;
 mod tensors;
 mod train;
 
-pub use batch::{CategoryBatch, CategoryGradients};
+pub use batch::{CategoryBatch, CategoryGradients, CategoryModel, PreparedCategory};
 pub use config::{CategoryFieldConfig, CategoryRayBudget};
 pub use model::CategoryField;
 

@@ -42,7 +42,7 @@ struct CodeLayer {
 
 /// The packed category network of one (width, code dimension).
 #[derive(Debug, Clone)]
-pub(crate) struct CategoryNet {
+pub struct CategoryNet {
     /// Hidden width W.
     pub hidden: usize,
     /// Code dimension D (of z_s and of z_t each).
@@ -59,7 +59,7 @@ pub(crate) struct CategoryNet {
 
 /// Scratch buffers of one chunk (reused across chunks and steps).
 #[derive(Debug, Default)]
-pub(crate) struct CategoryScratch {
+pub struct CategoryScratch {
     pub(super) emb: Vec<f32>,
     pub(super) dsin: Vec<f32>,
     /// y0, y0+c, y1, y1+c, y2, y2+c, y3, y4, y5, y5+c, y6, y7 (see the module doc of `category`).

@@ -1,12 +1,12 @@
 //! The fused training pass of the category network on one chunk: forward, render, loss,
 //! backward, with each member's ∂L/∂c summed into the `dc` tail of the gradient buffer.
 
+use super::super::chunk_loss::{ChunkHeads, HEAD_LD, render_loss_backward};
 use super::super::dense::Rows;
 use super::super::encoding::{self, COL_DIMS, EMB_LD, GEO_DIMS};
 use super::super::gemm::{Init, Post, padded};
-use super::super::loss::{FieldLosses, LossNorm, ray_loss};
-use super::super::occupancy::{ALPHA_SCALE, Heads};
-use super::super::render::{render_ray, render_ray_backward};
+use super::super::loss::{FieldLosses, LossNorm};
+use super::super::occupancy::Heads;
 use super::super::simd::Backend;
 use super::CategorySamples;
 use super::net::{CAT, CategoryNet, CategoryScratch, Membership, SHAPE_1, SHAPE_2, TEXTURE, encoding_rows};
@@ -50,7 +50,7 @@ impl CategoryNet {
             samples_per_ray: spr,
         };
         let (params, packed) = (input.params, input.packed);
-        let points = &samples.points[range.clone()];
+        let points = &samples.points[range];
         self.forward(
             backend,
             params,
@@ -62,35 +62,21 @@ impl CategoryNet {
             s,
             Heads::All,
         );
-        let z = &samples.z[range];
-
-        // Render, loss and gradients with respect to the raw head outputs.
-        let mut losses = FieldLosses::default();
-        s.d_alpha[..n * 16].fill(0.0);
-        s.d_colour[..n * 16].fill(0.0);
-        for (i, ray) in rays.enumerate() {
-            let r = i * spr..(i + 1) * spr;
-            let (occ, rgb, zr) = (&s.occ[r.clone()], &s.rgb[r.clone()], &z[r.clone()]);
-            let render = render_ray(occ, rgb, zr, &mut s.weights[r.clone()], &mut s.trans[r.clone()]);
-            let (l, g) = ray_loss(
-                &render,
-                samples.depth_m[ray],
-                samples.rgb[ray],
-                samples.states[ray],
-                input.norm,
-            );
-            losses = losses.add(l);
-            let (w, t) = (&s.weights[r.clone()], &s.trans[r.clone()]);
-            render_ray_backward(&g, occ, rgb, zr, w, t, &mut s.d_occ[r.clone()], &mut s.d_rgb[r.clone()]);
-            for k in r {
-                let o = s.occ[k];
-                s.d_alpha[k * 16] = ALPHA_SCALE * s.d_occ[k] * o * (1.0 - o);
-                for c in 0..3 {
-                    let v = s.rgb[k][c];
-                    s.d_colour[k * 16 + c] = s.d_rgb[k][c] * v * (1.0 - v);
-                }
-            }
-        }
+        let losses = render_loss_backward(
+            samples,
+            rays,
+            input.norm,
+            ChunkHeads {
+                occ: &s.occ,
+                rgb: &s.rgb,
+                weights: &mut s.weights,
+                trans: &mut s.trans,
+                d_occ: &mut s.d_occ,
+                d_rgb: &mut s.d_rgb,
+                d_alpha: &mut s.d_alpha,
+                d_colour: &mut s.d_colour,
+            },
+        );
 
         // Backward through the network, colour head first.
         let (grad, dc) = grad.split_at_mut(self.grad_len);
@@ -100,8 +86,8 @@ impl CategoryNet {
         let col = Rows::new(&s.emb[GEO_DIMS..], EMB_LD);
         let (p, q) = (&mut s.p, &mut s.q);
         let (gp, cp) = (padded(GEO_DIMS), padded(COL_DIMS));
-        let d_colour = Rows::new(&s.d_colour, 16);
-        let d_alpha = Rows::new(&s.d_alpha, 16);
+        let d_colour = Rows::new(&s.d_colour, HEAD_LD);
+        let d_alpha = Rows::new(&s.d_alpha, HEAD_LD);
         let code_grad = |d: &mut [f32], y: &[f32], slot: usize, dc: &mut [f32]| {
             self.code_grad_and_mask(d, y, slot, n, members, dc);
         };

@@ -31,7 +31,7 @@ pub const ALPHA_SCALE: f32 = 10.0;
 
 /// The packed occupancy network of one hidden width.
 #[derive(Debug, Clone)]
-pub(crate) struct OccupancyNet {
+pub struct OccupancyNet {
     /// Hidden width H.
     pub hidden: usize,
     layers: [Dense; 7],
@@ -45,7 +45,7 @@ pub(crate) struct OccupancyNet {
 
 /// Scratch buffers of one chunk (reused across chunks and steps).
 #[derive(Debug, Default)]
-pub(crate) struct OccupancyScratch {
+pub struct OccupancyScratch {
     emb: Vec<f32>,
     dsin: Vec<f32>,
     h: [Vec<f32>; 5],

@@ -1,13 +1,13 @@
 //! The fused training pass of the occupancy MLP on one chunk: forward, render, loss, backward.
 
+use super::super::chunk_loss::{ChunkHeads, HEAD_LD, render_loss_backward};
 use super::super::dense::Rows;
 use super::super::encoding::{self, COL_DIMS, EMB_LD, GEO_DIMS};
 use super::super::gemm::{Init, Post, padded};
-use super::super::loss::{FieldLosses, LossNorm, ray_loss};
-use super::super::render::{RenderGrad, render_ray, render_ray_backward};
+use super::super::loss::{FieldLosses, LossNorm};
 use super::super::samples::RaySamples;
 use super::super::simd::Backend;
-use super::{ALPHA_SCALE, Heads, OccupancyNet, OccupancyScratch, encoding_rows};
+use super::{Heads, OccupancyNet, OccupancyScratch, encoding_rows};
 
 impl OccupancyNet {
     /// One fused training pass over rays `rays_range` of `rays`: forward, render, loss and
@@ -28,52 +28,22 @@ impl OccupancyNet {
         let samples = rays_range.start * spr..rays_range.end * spr;
         let n = samples.len();
         let hp = self.hp();
-        self.forward(
-            backend,
-            params,
-            packed,
-            scale,
-            &rays.points[samples.clone()],
-            s,
-            Heads::All,
+        self.forward(backend, params, packed, scale, &rays.points[samples], s, Heads::All);
+        let losses = render_loss_backward(
+            rays,
+            rays_range,
+            norm,
+            ChunkHeads {
+                occ: &s.occ,
+                rgb: &s.rgb,
+                weights: &mut s.weights,
+                trans: &mut s.trans,
+                d_occ: &mut s.d_occ,
+                d_rgb: &mut s.d_rgb,
+                d_alpha: &mut s.d_alpha,
+                d_colour: &mut s.d_colour,
+            },
         );
-        let z = &rays.z[samples];
-
-        // Render, loss and gradients with respect to the raw head outputs.
-        let mut losses = FieldLosses::default();
-        s.d_alpha[..n * 16].fill(0.0);
-        s.d_colour[..n * 16].fill(0.0);
-        for (i, ray) in rays_range.enumerate() {
-            let r = i * spr..(i + 1) * spr;
-            let render = render_ray(
-                &s.occ[r.clone()],
-                &s.rgb[r.clone()],
-                &z[r.clone()],
-                &mut s.weights[r.clone()],
-                &mut s.trans[r.clone()],
-            );
-            let (l, g): (FieldLosses, RenderGrad) =
-                ray_loss(&render, rays.depth_m[ray], rays.rgb[ray], rays.states[ray], norm);
-            losses = losses.add(l);
-            render_ray_backward(
-                &g,
-                &s.occ[r.clone()],
-                &s.rgb[r.clone()],
-                &z[r.clone()],
-                &s.weights[r.clone()],
-                &s.trans[r.clone()],
-                &mut s.d_occ[r.clone()],
-                &mut s.d_rgb[r.clone()],
-            );
-            for k in r {
-                let o = s.occ[k];
-                s.d_alpha[k * 16] = ALPHA_SCALE * s.d_occ[k] * o * (1.0 - o);
-                for c in 0..3 {
-                    let v = s.rgb[k][c];
-                    s.d_colour[k * 16 + c] = s.d_rgb[k][c] * v * (1.0 - v);
-                }
-            }
-        }
 
         // Backward through the MLP, heads first.
         let [l1, l2, l3, l4, la, l5, lc] = &self.layers;
@@ -90,11 +60,11 @@ impl OccupancyNet {
         let (gp, cp) = (padded(GEO_DIMS), padded(COL_DIMS));
         let d_colour = Rows {
             data: &s.d_colour,
-            ld: 16,
+            ld: HEAD_LD,
         };
         let d_alpha = Rows {
             data: &s.d_alpha,
-            ld: 16,
+            ld: HEAD_LD,
         };
         // out_color: p = d(h5 pre-activation)
         lc.backward_weights(backend, n, &[Rows::new(h5, hp)], d_colour, grad);

@@ -4,7 +4,7 @@
 
 use bevy_ecs::prelude::*;
 use catmap::field::{
-    BACKGROUND_HIDDEN, OBJECT_HIDDEN, OccupancyField, RaySamplerConfig, RaySamples, SampleBatch, sample_window_rays,
+    BACKGROUND_HIDDEN, OBJECT_HIDDEN, OccupancyField, RaySamplerConfig, RaySamples, sample_window_rays,
 };
 use catmap::rng::{RngStream, seeded_rng};
 use nalgebra::Point3;
@@ -197,7 +197,7 @@ fn train_one(
         .par_iter_mut()
         .map(|(keyframes, slot, rng, _)| sample_window_rays(&keyframes.0, &slot.origin, rays, &mut rng.0))
         .collect();
-    let losses = batch.train_step_scaled(indices, &plan.learning_rate_scales, &SampleBatch { fields })?;
+    let losses = batch.train_step_scaled(indices, &plan.learning_rate_scales, &fields)?;
     for ((.., loss), latest) in work.iter_mut().zip(&losses) {
         loss.latest = *latest;
         loss.steps += 1;
