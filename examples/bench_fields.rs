@@ -9,16 +9,16 @@
 //!    1200 background rays.
 //!
 //! ```text
-//! cargo run --release -p catmap --example bench_fields
-//! cargo run --release -p catmap --example bench_fields -- --seconds 5
+//! cargo run --release -p catmap --features bench --example bench_fields
+//! cargo run --release -p catmap --features bench --example bench_fields -- --seconds 5
 //! ```
 
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use candle_core::{Device, Tensor};
-use catmap::field::reference::CandleMlpBatch;
-use catmap::field::{AdamWConfig, Backend, FieldBatch, GEO_DIMS, MlpBatch, OccupancyField, RaySamples};
+use catmap::field::bench::{CandleMlpBatch, MlpBatch};
+use catmap::field::{AdamWConfig, Backend, FieldBatch, GEO_DIMS, OccupancyField, RaySamples};
 use catmap::ids::ObjectId;
 use catmap::rng::{RngStream, seeded_rng};
 use clap::Parser;

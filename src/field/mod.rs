@@ -23,10 +23,12 @@
 //! | `ray_sampler` | the depth-guided sampler: keyframes, pixels, depths along rays |
 //! | `tensors` | parameters as named candle tensors |
 //! | `category` | the CodeNeRF-style category field (shared weights, per-member codes), batched |
-//! | `mlp` | a plain MLP batch on the same machinery (benchmark shape) |
+//! | `bench` | benchmark-only (feature `bench`): a plain MLP batch on the same machinery, its candle twin |
 
 mod adamw;
 mod batch;
+#[cfg(any(test, feature = "bench"))]
+pub mod bench;
 pub mod category;
 mod chunk_loss;
 mod config;
@@ -37,7 +39,6 @@ mod fused_batch;
 mod gemm;
 mod layout;
 mod loss;
-mod mlp;
 mod object_field;
 mod occupancy;
 mod ray_sampler;
@@ -57,7 +58,6 @@ pub use encoding::{COL_DIMS, EMB_DIMS, GEO_DIMS, NUM_BANDS, SIN_DIMS};
 pub use fused_batch::{CHUNK_SAMPLES, FieldStep, FusedBatch, FusedModel};
 pub use layout::{InitKind, ParamLayout, TensorSpec};
 pub use loss::{COLOUR_WEIGHT, DEPTH_STD_EPS, FieldLosses, OPACITY_WEIGHT};
-pub use mlp::MlpBatch;
 pub use object_field::{BACKGROUND_HIDDEN, FieldEval, OBJECT_HIDDEN, OccupancyField};
 pub use occupancy::ALPHA_SCALE;
 pub use ray_sampler::{RaySamplerConfig, choose_step_views, sample_training_rays, sample_window_rays};

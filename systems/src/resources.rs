@@ -10,7 +10,7 @@ use catmap::field::AdamWConfig;
 use catmap::sensor::frame::SharedFrame;
 use catmap::training::StreamPhase;
 use catmap::{ClassId, FrameIndex, MapperConfig, ObjectId};
-use crossbeam_channel::Receiver;
+use crossbeam_channel::{Receiver, TryRecvError};
 
 /// The mapper's configuration.
 #[derive(Resource, Debug, Clone)]
@@ -54,6 +54,24 @@ impl StreamProgress {
             }
         }
         None
+    }
+
+    /// Takes at most `cap` messages from `inbox` and counts them; returns the frames they carry.
+    /// A reader gone without its end message (it died) ends the stream once the inbox is empty.
+    /// Every message received is counted: none is taken only to test the channel.
+    pub fn take_from(&mut self, inbox: &Receiver<StreamMessage>, cap: usize) -> Vec<SharedFrame> {
+        let mut frames = Vec::new();
+        for _ in 0..cap {
+            if self.ended.is_some() {
+                break;
+            }
+            match inbox.try_recv() {
+                Ok(message) => frames.extend(self.record(message)),
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => self.end_without_message(),
+            }
+        }
+        frames
     }
 
     /// Ends a stream whose reader is gone without its end message (it died): what was mapped
@@ -251,5 +269,63 @@ impl std::ops::Deref for CategoryFields {
 impl std::ops::DerefMut for CategoryFields {
     fn deref_mut(&mut self) -> &mut CategoryFieldSet {
         &mut self.set
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn skipped(position: usize) -> StreamMessage {
+        StreamMessage::Skipped {
+            position,
+            reason: format!("frame {position} unreadable"),
+        }
+    }
+
+    #[test]
+    fn a_tick_takes_at_most_its_cap_and_counts_every_message_it_takes() {
+        let (sender, inbox) = crossbeam_channel::unbounded();
+        for position in 0..5 {
+            sender.send(skipped(position)).expect("open channel");
+        }
+        let mut progress = StreamProgress::default();
+        assert!(
+            progress.take_from(&inbox, 3).is_empty(),
+            "skipped frames carry no frame"
+        );
+        assert_eq!(progress.frames_skipped, 3);
+        assert_eq!(inbox.len(), 2, "the rest waits for the next tick");
+        assert_eq!(progress.phase(), StreamPhase::Streaming);
+    }
+
+    #[test]
+    fn a_reader_gone_without_its_end_ends_the_stream_only_after_its_last_message() {
+        let (sender, inbox) = crossbeam_channel::unbounded();
+        for position in 0..2 {
+            sender.send(skipped(position)).expect("open channel");
+        }
+        drop(sender);
+        let mut progress = StreamProgress::default();
+        progress.take_from(&inbox, 2);
+        assert_eq!(progress.frames_skipped, 2, "both messages counted");
+        assert_eq!(progress.phase(), StreamPhase::Streaming, "the cap was reached first");
+        progress.take_from(&inbox, 2);
+        assert_eq!(progress.phase(), StreamPhase::Ended);
+        assert_eq!(progress.ended.map(|s| s.frames_skipped), Some(2));
+    }
+
+    #[test]
+    fn nothing_after_the_end_message_is_taken() {
+        let (sender, inbox) = crossbeam_channel::unbounded();
+        sender.send(skipped(0)).expect("open channel");
+        sender
+            .send(StreamMessage::End(StreamStats::default()))
+            .expect("open channel");
+        sender.send(skipped(1)).expect("open channel");
+        let mut progress = StreamProgress::default();
+        progress.take_from(&inbox, 10);
+        assert_eq!(progress.phase(), StreamPhase::Ended);
+        assert_eq!((progress.frames_skipped, inbox.len()), (1, 1));
     }
 }

@@ -3,8 +3,8 @@
 //! step against a hand-computed update, and bit-identical results across thread counts.
 
 use candle_core::DType;
-use catmap::field::reference::{mlp_reference, occupancy_reference};
-use catmap::field::{AdamWConfig, Backend, FieldBatch, MlpBatch, OccupancyField, ParamLayout, RaySamples};
+use catmap::field::reference::occupancy_reference;
+use catmap::field::{AdamWConfig, Backend, FieldBatch, OccupancyField, ParamLayout, RaySamples};
 use catmap::ids::ObjectId;
 use catmap::rng::{RngStream, seeded_rng};
 use rand::RngExt;
@@ -197,36 +197,4 @@ fn results_are_bit_identical_for_any_thread_count() {
     };
     assert_eq!(run(1), run(2), "1 and 2 threads give the same parameters");
     assert_eq!(run(2), run(3), "2 and 3 threads give the same parameters");
-}
-
-#[test]
-fn plain_mlp_gradients_match_candle_autograd() {
-    let dims = [39, 32, 32, 32, 4];
-    for (count, points) in [(1, 50), (3, 200), (2, 1200)] {
-        let mut rng = seeded_rng(9, RngStream::Mapper);
-        let mut mlps = MlpBatch::new(&dims, count, AdamWConfig::adam(1e-3), &mut rng).expect("valid widths");
-        let inputs: Vec<Vec<f32>> = (0..count)
-            .map(|_| (0..points * 39).map(|_| rng.random_range(-1.0..1.0)).collect())
-            .collect();
-        let targets: Vec<Vec<f32>> = (0..count)
-            .map(|_| (0..points * 4).map(|_| rng.random_range(-1.0..1.0)).collect())
-            .collect();
-        let xs: Vec<&[f32]> = inputs.iter().map(Vec::as_slice).collect();
-        let ts: Vec<&[f32]> = targets.iter().map(Vec::as_slice).collect();
-        let (losses, grads) = mlps.loss_and_gradients(&xs, &ts).expect("shapes agree");
-        for b in 0..count {
-            let params = mlps.params(b).expect("exists");
-            let (loss, grad) = mlp_reference(&dims, params, &inputs[b], &targets[b], DType::F64).expect("candle runs");
-            assert!(
-                (f64::from(losses[b]) - loss).abs() < 1e-5 * loss.abs(),
-                "loss {} vs {loss}",
-                losses[b]
-            );
-            let (rel, name) = worst_tensor_error(mlps.layout(), &grads[b], &grad);
-            assert!(
-                rel <= 1e-4,
-                "B = {count}, N = {points}: gradient of {name} off by {rel:.2e}"
-            );
-        }
-    }
 }

@@ -15,18 +15,7 @@ pub fn ingest_frames(
     mut commands: Commands,
 ) {
     let _timer = times.start("ingest");
-    if progress.ended.is_some() {
-        return;
-    }
-    for message in inbox.0.try_iter().take(settings.0.stream.frames_per_tick) {
-        if let Some(frame) = progress.record(message) {
-            commands.spawn(CameraFrame(frame));
-        }
-        if progress.ended.is_some() {
-            return;
-        }
-    }
-    if inbox.0.is_empty() && inbox.0.try_recv().is_err_and(|e| e.is_disconnected()) {
-        progress.end_without_message();
+    for frame in progress.take_from(&inbox.0, settings.0.stream.frames_per_tick) {
+        commands.spawn(CameraFrame(frame));
     }
 }

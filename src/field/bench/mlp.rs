@@ -1,5 +1,5 @@
 //! [`MlpBatch`]: B plain ReLU MLPs (`d0 → d1 → … → dL`, linear output) with an L1 loss, trained
-//! in one fused batched step by the same machinery as [`super::FieldBatch`].
+//! in one fused batched step by the same machinery as [`super::super::FieldBatch`].
 //!
 //! This is the benchmark shape of FACTS.md (B = 16 MLPs 39→32→32→32→4, N = 1200 points each):
 //! `L_b = mean_{points, outputs} |y − target|`; the step applies AdamW per MLP.
@@ -8,12 +8,12 @@
 use rand::Rng;
 use rayon::prelude::*;
 
-use super::adamw::{AdamWConfig, AdamWState};
-use super::dense::{Activation, Dense, PackingPlan, Rows};
-use super::gemm::{Init, Post};
-use super::layout::ParamLayout;
-use super::simd::Backend;
-use super::tasks::{TaskPool, plan_tasks, tasks_by_field};
+use super::super::adamw::{AdamWConfig, AdamWState};
+use super::super::dense::{Activation, Dense, PackingPlan, Rows};
+use super::super::gemm::{Init, Post};
+use super::super::layout::ParamLayout;
+use super::super::simd::Backend;
+use super::super::tasks::{TaskPool, plan_tasks, tasks_by_field};
 use crate::error::{CatmapError, Result};
 
 /// Points per chunk.
@@ -284,4 +284,63 @@ fn train_chunk(
         }
     }
     loss
+}
+
+#[cfg(test)]
+mod tests {
+    use candle_core::DType;
+    use rand::RngExt;
+
+    use super::*;
+    use crate::field::bench::mlp_reference;
+    use crate::rng::{RngStream, seeded_rng};
+
+    /// The largest error of a tensor of `got` relative to its norm in `want` (or 1 % of the
+    /// whole gradient's norm, for tensors whose gradient is near zero), and its name.
+    fn worst_tensor_error(layout: &ParamLayout, got: &[f32], want: &[f64]) -> (f64, String) {
+        let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
+        let all = norm(&mut want.iter().copied());
+        let mut worst = (0.0, String::new());
+        for t in layout.tensors() {
+            let diff = norm(&mut t.range().map(|i| f64::from(got[i]) - want[i]));
+            let rel = diff / norm(&mut t.range().map(|i| want[i])).max(1e-2 * all);
+            if rel > worst.0 {
+                worst = (rel, t.name.clone());
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn plain_mlp_gradients_match_candle_autograd() {
+        let dims = [39, 32, 32, 32, 4];
+        for (count, points) in [(1, 50), (3, 200), (2, 1200)] {
+            let mut rng = seeded_rng(9, RngStream::Mapper);
+            let mut mlps = MlpBatch::new(&dims, count, AdamWConfig::adam(1e-3), &mut rng).expect("valid widths");
+            let inputs: Vec<Vec<f32>> = (0..count)
+                .map(|_| (0..points * 39).map(|_| rng.random_range(-1.0..1.0)).collect())
+                .collect();
+            let targets: Vec<Vec<f32>> = (0..count)
+                .map(|_| (0..points * 4).map(|_| rng.random_range(-1.0..1.0)).collect())
+                .collect();
+            let xs: Vec<&[f32]> = inputs.iter().map(Vec::as_slice).collect();
+            let ts: Vec<&[f32]> = targets.iter().map(Vec::as_slice).collect();
+            let (losses, grads) = mlps.loss_and_gradients(&xs, &ts).expect("shapes agree");
+            for b in 0..count {
+                let params = mlps.params(b).expect("exists");
+                let (loss, grad) =
+                    mlp_reference(&dims, params, &inputs[b], &targets[b], DType::F64).expect("candle runs");
+                assert!(
+                    (f64::from(losses[b]) - loss).abs() < 1e-5 * loss.abs(),
+                    "loss {} vs {loss}",
+                    losses[b]
+                );
+                let (rel, name) = worst_tensor_error(mlps.layout(), &grads[b], &grad);
+                assert!(
+                    rel <= 1e-4,
+                    "B = {count}, N = {points}: gradient of {name} off by {rel:.2e}"
+                );
+            }
+        }
+    }
 }
