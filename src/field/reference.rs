@@ -5,9 +5,8 @@
 //! product for the transmittance, `detach` on the variance, masked means), in the dtype asked
 //! for (f64 for gradient checks). It is slow and allocates freely; it is not used for training.
 
-use candle_core::{D, DType, Device, Tensor, Var};
+use candle_core::{DType, Device, Tensor, Var};
 
-use super::adamw::AdamWConfig;
 use super::directions::NUM_DIRECTIONS;
 use super::encoding::{GEO_DIMS, NUM_BANDS};
 use super::layout::ParamLayout;

@@ -7,7 +7,6 @@ use catmap::field::reference::occupancy_reference;
 use catmap::field::{AdamWConfig, Backend, FieldBatch, OccupancyField, ParamLayout, RaySamples};
 use catmap::ids::ObjectId;
 use catmap::rng::{RngStream, seeded_rng};
-use rand::RngExt;
 
 /// Worst norm-relative error over tensors: ‖a − b‖ / max(‖b‖, 1e-2·‖b_all‖). The floor keeps a
 /// tensor whose gradient nearly cancels (a one-element bias summed over all samples) from turning
