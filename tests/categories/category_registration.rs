@@ -1,5 +1,5 @@
 //! Category registration on the default synthetic scene (the category-registration issue's
-//! acceptance): every 2nd frame, the offline protocol with a short training (1 500 steps) and
+//! acceptance): every 4th frame, the offline protocol with a short training (500 steps) and
 //! categories on; then the subcategories and the aligned boxes are checked against the scene's
 //! truth, and the representatives' observed surface fractions are printed.
 
@@ -20,17 +20,17 @@ fn map_default_scene() -> (SyntheticScene, Vec<ClassRecord>, BTreeMap<String, f6
         seed: 0,
         fields: FieldConfig {
             offline: true,
-            offline_iterations: 1500,
+            offline_iterations: 500,
             ..FieldConfig::default()
         },
         ..MapperConfig::default()
     };
-    // The paper's fixed protocol: exactly the 1 500 steps (the fast schedule trains until the
+    // The paper's fixed protocol: exactly the 500 steps (the fast schedule trains until the
     // fields converge).
     config.schedule.policy = SchedulePolicy::Paper;
     config.categories.enabled = true;
     config.category_fields.enabled = false; // registration only
-    let mut mapper = crate::common::mapping::map_scene(&scene, (0..scene.len()).step_by(2), config);
+    let mut mapper = crate::common::mapping::map_scene(&scene, (0..scene.len()).step_by(4), config);
     let records = mapper.category_records();
     let stages = mapper.stage_seconds();
     (scene, records, stages)
