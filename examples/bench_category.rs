@@ -7,8 +7,8 @@
 //! 3. the candle autograd reference (f32 forward + backward, no optimiser) on the same batch.
 //!
 //! ```text
-//! cargo run --release -p catmap --example bench_category
-//! cargo run --release -p catmap --example bench_category -- --categories 8 --members 2
+//! cargo run --release -p catmap --features bench --example bench_category
+//! cargo run --release -p catmap --features bench --example bench_category -- --categories 8 --members 2
 //! ```
 
 use std::time::{Duration, Instant};

@@ -7,8 +7,8 @@
 //!    held back by the bounded channel.
 //!
 //! ```text
-//! cargo run --release --example bench_ingest                 # writes the scene to target/bench-scene
-//! cargo run --release --example bench_ingest -- --long-frames 10000
+//! cargo run --release --features bench --example bench_ingest                 # writes the scene to target/bench-scene
+//! cargo run --release --features bench --example bench_ingest -- --long-frames 10000
 //! ```
 
 use std::ops::ControlFlow;

@@ -13,8 +13,8 @@
 //! reader can hold at most `capacity` frames in the channel plus one in hand).
 //!
 //! ```text
-//! cargo run --release --example bench_long_stream
-//! cargo run --release --example bench_long_stream -- --frames 2000 --steps-per-frame 4 --rss-every 100
+//! cargo run --release --features bench --example bench_long_stream
+//! cargo run --release --features bench --example bench_long_stream -- --frames 2000 --steps-per-frame 4 --rss-every 100
 //! ```
 
 use std::f32::consts::TAU;

@@ -1,7 +1,7 @@
 //! Registration benchmark: seeded trials on the synthetic designs (partial view, noise,
 //! outliers, random pose) and the time per pair.
 //!
-//! `cargo run --release --example bench_registration -- [--trials N] [--config 'TOML']`
+//! `cargo run --release --features bench --example bench_registration -- [--trials N] [--config 'TOML']`
 //! prints one line per trial, the success rate (rotation < 5° and translation < 3 cm, or
 //! aligned-cloud distance < 1 cm for symmetric equivalents) and seconds per pair.
 

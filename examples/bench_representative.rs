@@ -8,7 +8,7 @@
 //! uncertainty spheres and its registration + subcategorisation took.
 //!
 //! ```text
-//! cargo run --release --example bench_representative -- --seeds 0,1,2,3
+//! cargo run --release --features bench --example bench_representative -- --seeds 0,1,2,3
 //! ```
 
 use std::collections::BTreeMap;

@@ -1,7 +1,7 @@
 //! Defences around third-party image decoders: a structural check of PNG chunks the `png` crate
 //! trusts, and a guard that turns a decoder panic into an error naming the file.
 //!
-//! Both were found by `tests/readers/fuzz_readers.rs`: a PNG whose `PLTE` chunk holds fewer than three
+//! Both were found by `tests/suite/readers/fuzz_readers.rs`: a PNG whose `PLTE` chunk holds fewer than three
 //! bytes makes `png` 0.18 index past the palette and panic while expanding pixels.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};

@@ -21,7 +21,7 @@
 //! consistency graph at a 1 cm noise bound keeps a clique of only ~15 pairs out of millions of
 //! edges (13–16 s per candidate) and the estimate is often wrong; with the 24 rotations the
 //! all-to-all result is the same for every rotation anyway. Multi-start trimmed ICP is fast
-//! (tens of ms per pair) and meets the trials in `tests/categories/registration_trials.rs`.
+//! (tens of ms per pair) and meets the trials in `tests/suite/categories/registration_trials.rs`.
 
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 use rand::{Rng, RngExt};

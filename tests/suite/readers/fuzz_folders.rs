@@ -3,7 +3,7 @@
 //! turned into a folder; every frame is read. Same harness and settings as `fuzz_readers.rs`:
 //!
 //! ```text
-//! CATMAP_FUZZ_SECONDS=600 cargo test --test readers fuzz_folders -- --nocapture --test-threads 1
+//! CATMAP_FUZZ_SECONDS=600 cargo test --test suite readers::fuzz_folders -- --nocapture --test-threads 1
 //! ```
 
 use std::path::Path;

@@ -8,7 +8,7 @@
 //! frame that is inconsistent or holds a NaN. A long run, with the per-target report:
 //!
 //! ```text
-//! CATMAP_FUZZ_SECONDS=600 cargo test --test readers fuzz_readers -- --nocapture --test-threads 1
+//! CATMAP_FUZZ_SECONDS=600 cargo test --test suite readers::fuzz_readers -- --nocapture --test-threads 1
 //! ```
 
 use std::path::Path;

@@ -5,7 +5,7 @@
 //! Layout: `png/NAME` is decoded on its own as RGB, 8-bit grey and 16-bit grey; `config/NAME` is
 //! loaded as a config file; `replica/SLOT/NAME` and `scannet/SLOT/NAME` replace the file `SLOT`
 //! (e.g. `traj_w_c.txt`, `pose/0.txt`) of a small valid dataset folder, which is then opened and
-//! read frame by frame. Inputs the fuzzers (`tests/readers/fuzz_readers.rs`) found are kept here with the
+//! read frame by frame. Inputs the fuzzers (`tests/suite/readers/fuzz_readers.rs`) found are kept here with the
 //! iteration that found them in their name.
 
 use std::collections::BTreeMap;
