@@ -58,7 +58,7 @@ fn run_on_a_foreign_dataset(kind: ForeignSceneFile) {
         .args(["--format", "replica", "--camera", &camera])
         .arg("--config")
         .arg(work.join("config.toml"))
-        .args(["--max-frames", "30", "--out"])
+        .args(["--stride", "3", "--out"])
         .arg(work.join("out"))
         .output()
         .expect("catmap runs");

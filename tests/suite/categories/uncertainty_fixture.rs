@@ -76,7 +76,7 @@ fn trained_surface_is_certain_empty_space_is_certain_and_the_unseen_half_is_not(
     let mut rng = seeded_rng(3, RngStream::Mapper);
     let mut batch = FieldBatch::new(AdamWConfig::default());
     batch.push(OccupancyField::new(OBJECT_HIDDEN, 1.0, &mut rng));
-    for _ in 0..1500 {
+    for _ in 0..750 {
         let rays = half_seen_rays(&mut rng, 240);
         batch.train_step(&[rays]).expect("valid rays");
     }
@@ -114,6 +114,6 @@ fn trained_surface_is_certain_empty_space_is_certain_and_the_unseen_half_is_not(
     assert!(u_empty < cfg.low.0 && g_empty > 0.5, "{report}");
     // Not asserted — a measured gap: the issue expects the never-seen half to give medium u and
     // low g, but the field extrapolates the ball's interior into a confident solid (measured
-    // u ≈ 0.86, g ≈ 1.0), so rays into the unseen half look like certain hits.
+    // u ≈ 0.95, g ≈ 1.0), so rays into the unseen half look like certain hits.
     let _ = (u_unseen, g_unseen);
 }

@@ -139,7 +139,7 @@ fn final_meshes(offline_steps: usize) -> MapMeshes {
 
 #[test]
 fn meshes_are_written_per_object_near_the_ground_truth_and_repeat_bit_for_bit() {
-    let meshes = final_meshes(300);
+    let meshes = final_meshes(150);
     let scene = SyntheticScene::generate(SEED, Preset::Small).expect("scene");
     assert_eq!(meshes.objects.len(), scene.objects().len(), "a mesh for every object");
     assert!(
@@ -156,10 +156,10 @@ fn meshes_are_written_per_object_near_the_ground_truth_and_repeat_bit_for_bit() 
     assert!(pred.join("scene.ply").is_file() && pred.join("background.ply").is_file());
     let report = evaluate_dirs(&pred, &gt, Crop::Paper, 0).expect("evaluate");
     assert_eq!(report.mean.missing, 0, "every ground-truth object has a mesh");
-    // 300 steps is a short training run; the bound only says the meshes sit on the objects.
+    // 150 steps is a short training run; the bound only says the meshes sit on the objects.
     let completion = report.mean.completion_cm.expect("completion");
     assert!(completion < 15.0, "mean completion {completion} cm");
 
-    let again = final_meshes(300);
+    let again = final_meshes(150);
     assert_eq!(meshes, again, "the same seed gives bit-identical meshes");
 }

@@ -31,17 +31,18 @@ fn config() -> MapperConfig {
         seed: 11,
         fields: FieldConfig {
             steps_per_frame: 3,
-            final_steps: 100,
+            final_steps: 60,
             ..FieldConfig::default()
         },
         ..MapperConfig::default()
     };
     // The paper's schedule has a category phase of its own (the fast one trains the category
-    // fields in the phase before), so that the run can stop in each phase.
+    // fields in the phase before), so that the run can stop in each phase; 60 steps per phase
+    // leave a step after its first chunk (`CHUNK_STEPS`, 50).
     config.schedule.policy = SchedulePolicy::Paper;
     config.categories.min_field_steps = 20;
     config.category_fields.enabled = true;
-    config.category_fields.iterations = 100;
+    config.category_fields.iterations = 60;
     config.meshes.object.voxel_size_m = 0.04;
     config.meshes.background_voxel_m = 0.1;
     config

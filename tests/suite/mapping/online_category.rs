@@ -17,12 +17,12 @@ fn category_fields_start_and_train_while_the_scene_streams() {
     let mut config = MapperConfig {
         seed: 3,
         fields: FieldConfig {
-            steps_per_frame: 4,
+            steps_per_frame: 2,
             ..FieldConfig::default()
         },
         ..MapperConfig::default()
     };
-    config.categories.min_field_steps = 20;
+    config.categories.min_field_steps = 10;
     config.category_fields.enabled = true;
     config.meshes.preview_every_frames = 5;
     let mut mapper = Mapper::new(config).expect("valid config");
