@@ -6,6 +6,8 @@
 //!   under its final name and `metrics.json` names each object's class from the map; when the
 //!   evaluation itself fails, the run exits 0 with its other outputs whole and the failure in the
 //!   log and in `summary.json`.
+//! - Kills (`kill_resume`): a run SIGKILLed at random moments and resumed each time ends like one
+//!   that was never interrupted, and every file on disk is whole after each kill.
 //! - Issue 18: what a newcomer meets — the README's quick look prints what it promises and leaves
 //!   the files it lists; a dataset in the wrong layout, or none, is refused with the expected
 //!   files and the other format named, and leaves no output folder; `eval` on a folder without
@@ -178,4 +180,5 @@ fn assert_outputs_whole(out: &Path) {
 }
 
 mod foreign;
+mod kill_resume;
 mod newcomer;
