@@ -61,6 +61,27 @@ impl MapperConfig {
             ends_on_convergence: fast,
         }
     }
+
+    /// The step counts this config sets away from their defaults that its schedule never runs:
+    /// the fast schedule (online) ends the training after the stream on convergence or at
+    /// `schedule.max_steps_after_stream`, in one phase that trains the category fields too, so
+    /// `fields.final_steps` and `category_fields.iterations` are not used there. `catmap run`
+    /// (any [`MapperConfig`] given to a mapper) warns about each, naming the key.
+    pub fn unused_step_counts(&self) -> Vec<&'static str> {
+        let defaults = MapperConfig::default();
+        let phases = self.after_stream();
+        let mut unused = Vec::new();
+        if !phases.ends_on_convergence {
+            return unused;
+        }
+        if self.fields.final_steps != defaults.fields.final_steps {
+            unused.push("fields.final_steps");
+        }
+        if phases.category_cap.is_none() && self.category_fields.iterations != defaults.category_fields.iterations {
+            unused.push("category_fields.iterations");
+        }
+        unused
+    }
 }
 
 #[cfg(test)]
@@ -135,6 +156,27 @@ mod tests {
         assert_eq!(
             (offline.first_cap, offline.category_cap, offline.ends_on_convergence),
             (15_000, Some(10_000), false)
+        );
+    }
+
+    #[test]
+    fn step_counts_the_fast_schedule_never_runs_are_named() {
+        let mut fast = config(SchedulePolicy::Fast, Protocol::Online, Fields::Category);
+        assert!(fast.unused_step_counts().is_empty(), "the defaults warn about nothing");
+        fast.fields.final_steps = 100;
+        fast.category_fields.iterations = 100;
+        assert_eq!(
+            fast.unused_step_counts(),
+            ["fields.final_steps", "category_fields.iterations"]
+        );
+        let mut paper = fast.clone();
+        paper.schedule.policy = SchedulePolicy::Paper;
+        assert!(paper.unused_step_counts().is_empty(), "the paper schedule runs both");
+        let mut offline = fast.clone();
+        offline.fields.offline = true;
+        assert!(
+            offline.unused_step_counts().is_empty(),
+            "offline is the paper's protocol"
         );
     }
 }

@@ -14,7 +14,7 @@
 //! | `layout` | named flat parameters, initialisation |
 //! | `render` | occupancy rendering of a ray and its backward |
 //! | `loss` | vMAP's depth / colour / opacity loss |
-//! | `chunk_loss` | a chunk's render, loss and head gradients (shared by every network) |
+//! | `heads` | the heads every network ends in: sigmoids, a chunk's render, loss and head gradients |
 //! | `adamw` | PyTorch AdamW, per-field state |
 //! | `gemm`, `simd`, `dense` | SIMD GEMM micro-kernels and packed linear layers |
 //! | `occupancy` | the occupancy MLP on a chunk (fused forward + backward) |
@@ -30,13 +30,13 @@ mod batch;
 #[cfg(any(test, feature = "bench"))]
 pub mod bench;
 pub mod category;
-mod chunk_loss;
 mod config;
 mod dense;
 mod directions;
 mod encoding;
 mod fused_batch;
 mod gemm;
+mod heads;
 mod layout;
 mod loss;
 mod object_field;

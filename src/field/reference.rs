@@ -21,6 +21,32 @@ pub(crate) fn ce(e: candle_core::Error) -> CatmapError {
     CatmapError::Degenerate(format!("candle: {e}"))
 }
 
+/// How far a gradient `got` (flat, in `layout` order) is from the reference `want`: the largest
+/// error of one tensor relative to that tensor's norm in `want` (or to 1 % of the whole
+/// gradient's norm, so that a tensor whose gradient nearly cancels — a one-element bias summed
+/// over all samples — does not turn f32 rounding into a large error), and that tensor's name.
+/// Typical errors are 1e-7 … 1e-6. With `FIELD_DEBUG` set, every tensor's error is logged.
+pub fn worst_tensor_error(layout: &ParamLayout, got: &[f32], want: &[f64]) -> (f64, String) {
+    let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
+    let all = norm(&mut want.iter().copied());
+    let mut worst = (0.0, String::new());
+    for t in layout.tensors() {
+        let diff = norm(&mut t.range().map(|i| f64::from(got[i]) - want[i]));
+        let reference = norm(&mut t.range().map(|i| want[i])).max(1e-2 * all);
+        let rel = diff / reference;
+        if std::env::var_os("FIELD_DEBUG").is_some() {
+            tracing::info!(
+                "{:>22}: rel {rel:.2e}  |ref| {reference:.3e}  |diff| {diff:.3e}",
+                t.name
+            );
+        }
+        if rel > worst.0 {
+            worst = (rel, t.name.clone());
+        }
+    }
+    worst
+}
+
 /// Forward values and gradients of the reference occupancy model on one field's rays.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct ReferenceOutput {

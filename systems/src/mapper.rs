@@ -82,6 +82,12 @@ impl Mapper {
     /// A mapper fed by a reader thread's channel (see `catmap::dataset::stream::FrameStream`).
     pub fn with_inbox(config: MapperConfig, inbox: Receiver<StreamMessage>) -> Result<Self, MapperError> {
         config.validate()?;
+        for key in config.unused_step_counts() {
+            tracing::warn!(
+                "{key} is not used by the fast schedule: it trains after the stream until every field converges, at most schedule.max_steps_after_stream = {} steps (`--schedule paper` runs {key})",
+                config.schedule.max_steps_after_stream
+            );
+        }
         let mut world = World::new();
         world.spawn((
             Background,

@@ -293,23 +293,8 @@ mod tests {
 
     use super::*;
     use crate::field::bench::mlp_reference;
+    use crate::field::reference::worst_tensor_error;
     use crate::rng::{RngStream, seeded_rng};
-
-    /// The largest error of a tensor of `got` relative to its norm in `want` (or 1 % of the
-    /// whole gradient's norm, for tensors whose gradient is near zero), and its name.
-    fn worst_tensor_error(layout: &ParamLayout, got: &[f32], want: &[f64]) -> (f64, String) {
-        let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
-        let all = norm(&mut want.iter().copied());
-        let mut worst = (0.0, String::new());
-        for t in layout.tensors() {
-            let diff = norm(&mut t.range().map(|i| f64::from(got[i]) - want[i]));
-            let rel = diff / norm(&mut t.range().map(|i| want[i])).max(1e-2 * all);
-            if rel > worst.0 {
-                worst = (rel, t.name.clone());
-            }
-        }
-        worst
-    }
 
     #[test]
     fn plain_mlp_gradients_match_candle_autograd() {

@@ -12,9 +12,9 @@
 use super::super::dense::{Activation, Dense, PackingPlan, Rows};
 use super::super::encoding::{self, COL_DIMS, EMB_LD, GEO_DIMS, TRIG_LD};
 use super::super::gemm::padded;
+use super::super::heads::HeadBuffers;
 use super::super::layout::ParamLayout;
-use super::super::occupancy::{ALPHA_SCALE, Heads};
-use super::super::render::sigmoid;
+use super::super::occupancy::Heads;
 use super::super::simd::Backend;
 
 /// Code layers, in table-slot order: three take the shape code, the last the texture code.
@@ -64,20 +64,11 @@ pub struct CategoryScratch {
     pub(super) dsin: Vec<f32>,
     /// y0, y0+c, y1, y1+c, y2, y2+c, y3, y4, y5, y5+c, y6, y7 (see the module doc of `category`).
     pub(super) h: [Vec<f32>; 12],
-    pub(super) alpha_raw: Vec<f32>,
-    pub(super) colour_raw: Vec<f32>,
-    pub(super) d_alpha: Vec<f32>,
-    pub(super) d_colour: Vec<f32>,
+    pub(super) heads: HeadBuffers,
     pub(super) p: Vec<f32>,
     pub(super) q: Vec<f32>,
     pub(super) d_geo: Vec<f32>,
     pub(super) d_col: Vec<f32>,
-    pub(super) occ: Vec<f32>,
-    pub(super) rgb: Vec<[f32; 3]>,
-    pub(super) weights: Vec<f32>,
-    pub(super) trans: Vec<f32>,
-    pub(super) d_occ: Vec<f32>,
-    pub(super) d_rgb: Vec<[f32; 3]>,
 }
 
 fn ensure(buf: &mut Vec<f32>, len: usize) {
@@ -236,18 +227,11 @@ impl CategoryNet {
         for h in &mut s.h {
             ensure(h, n * hp);
         }
-        for b in [&mut s.alpha_raw, &mut s.colour_raw, &mut s.d_alpha, &mut s.d_colour] {
-            ensure(b, n * 16);
-        }
+        s.heads.reserve(n);
         ensure(&mut s.p, n * hp);
         ensure(&mut s.q, n * hp);
         ensure(&mut s.d_geo, n * padded(GEO_DIMS));
         ensure(&mut s.d_col, n * padded(COL_DIMS));
-        for b in [&mut s.occ, &mut s.weights, &mut s.trans, &mut s.d_occ] {
-            ensure(b, n);
-        }
-        s.rgb.resize(n.max(s.rgb.len()), [0.0; 3]);
-        s.d_rgb.resize(n.max(s.d_rgb.len()), [0.0; 3]);
     }
 
     /// Forward pass of `points` (in the category's NOCS frame) into the scratch; the colour head
@@ -281,11 +265,9 @@ impl CategoryNet {
         add(y2, y2c, SHAPE_2);
         l_s2.forward(backend, packed, n, &[Rows::new(y2c, hp)], y3, Activation::Relu);
         l_enc.forward(backend, packed, n, &[Rows::new(y3, hp)], y4, Activation::Linear);
-        let a = &mut s.alpha_raw;
+        let a = &mut s.heads.alpha_raw;
         l_sigma.forward(backend, packed, n, &[Rows::new(y4, hp)], a, Activation::Linear);
-        for (o, a) in s.occ[..n].iter_mut().zip(s.alpha_raw.chunks_exact(16)) {
-            *o = sigmoid(ALPHA_SCALE * a[0]);
-        }
+        s.heads.occupancy_from_raw(n);
         if heads == Heads::OccupancyOnly {
             return;
         }
@@ -294,11 +276,9 @@ impl CategoryNet {
         add(y5, y5c, TEXTURE);
         l_t1.forward(backend, packed, n, &[Rows::new(y5c, hp)], y6, Activation::Relu);
         l_rgb0.forward(backend, packed, n, &[Rows::new(y6, hp)], y7, Activation::Relu);
-        let c = &mut s.colour_raw;
+        let c = &mut s.heads.colour_raw;
         l_rgb2.forward(backend, packed, n, &[Rows::new(y7, hh)], c, Activation::Linear);
-        for (c, r) in s.rgb[..n].iter_mut().zip(s.colour_raw.chunks_exact(16)) {
-            *c = [sigmoid(r[0]), sigmoid(r[1]), sigmoid(r[2])];
-        }
+        s.heads.colour_from_raw(n);
     }
 
     /// `dst = src + table[member(s), slot]`, row by row.
@@ -314,21 +294,17 @@ impl CategoryNet {
 
     /// Occupancy of the last forward pass (n values).
     pub(crate) fn occupancy<'a>(&self, s: &'a CategoryScratch, n: usize) -> &'a [f32] {
-        &s.occ[..n]
+        s.heads.occupancy(n)
     }
 
     /// α (= 10·raw) of the last forward pass.
     pub(crate) fn alpha(&self, s: &CategoryScratch, n: usize) -> Vec<f32> {
-        s.alpha_raw
-            .chunks_exact(16)
-            .take(n)
-            .map(|a| ALPHA_SCALE * a[0])
-            .collect()
+        s.heads.alpha(n)
     }
 
     /// Colours of the last forward pass with [`Heads::All`].
     pub(crate) fn colour<'a>(&self, s: &'a CategoryScratch, n: usize) -> &'a [[f32; 3]] {
-        &s.rgb[..n]
+        s.heads.colour(n)
     }
 }
 

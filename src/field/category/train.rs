@@ -1,10 +1,10 @@
 //! The fused training pass of the category network on one chunk: forward, render, loss,
 //! backward, with each member's ∂L/∂c summed into the `dc` tail of the gradient buffer.
 
-use super::super::chunk_loss::{ChunkHeads, HEAD_LD, render_loss_backward};
 use super::super::dense::Rows;
 use super::super::encoding::{self, COL_DIMS, EMB_LD, GEO_DIMS};
 use super::super::gemm::{Init, Post, padded};
+use super::super::heads::HEAD_LD;
 use super::super::loss::{FieldLosses, LossNorm};
 use super::super::occupancy::Heads;
 use super::super::simd::Backend;
@@ -62,21 +62,7 @@ impl CategoryNet {
             s,
             Heads::All,
         );
-        let losses = render_loss_backward(
-            samples,
-            rays,
-            input.norm,
-            ChunkHeads {
-                occ: &s.occ,
-                rgb: &s.rgb,
-                weights: &mut s.weights,
-                trans: &mut s.trans,
-                d_occ: &mut s.d_occ,
-                d_rgb: &mut s.d_rgb,
-                d_alpha: &mut s.d_alpha,
-                d_colour: &mut s.d_colour,
-            },
-        );
+        let losses = s.heads.render_loss_backward(samples, rays, input.norm);
 
         // Backward through the network, colour head first.
         let (grad, dc) = grad.split_at_mut(self.grad_len);
@@ -86,8 +72,8 @@ impl CategoryNet {
         let col = Rows::new(&s.emb[GEO_DIMS..], EMB_LD);
         let (p, q) = (&mut s.p, &mut s.q);
         let (gp, cp) = (padded(GEO_DIMS), padded(COL_DIMS));
-        let d_colour = Rows::new(&s.d_colour, HEAD_LD);
-        let d_alpha = Rows::new(&s.d_alpha, HEAD_LD);
+        let d_colour = Rows::new(&s.heads.d_colour, HEAD_LD);
+        let d_alpha = Rows::new(&s.heads.d_alpha, HEAD_LD);
         let code_grad = |d: &mut [f32], y: &[f32], slot: usize, dc: &mut [f32]| {
             self.code_grad_and_mask(d, y, slot, n, members, dc);
         };

@@ -22,8 +22,8 @@ mod train;
 use super::dense::{Activation, Dense, PackingPlan, Rows};
 use super::encoding::{self, COL_DIMS, EMB_LD, GEO_DIMS, TRIG_LD};
 use super::gemm::padded;
+use super::heads::HeadBuffers;
 use super::layout::ParamLayout;
-use super::render::sigmoid;
 use super::simd::Backend;
 
 /// α = ALPHA_SCALE · raw (vMAP's "unisurf" scaling).
@@ -49,20 +49,11 @@ pub struct OccupancyScratch {
     emb: Vec<f32>,
     dsin: Vec<f32>,
     h: [Vec<f32>; 5],
-    alpha_raw: Vec<f32>,
-    colour_raw: Vec<f32>,
-    d_alpha: Vec<f32>,
-    d_colour: Vec<f32>,
+    heads: HeadBuffers,
     p: Vec<f32>,
     q: Vec<f32>,
     d_geo: Vec<f32>,
     d_col: Vec<f32>,
-    occ: Vec<f32>,
-    rgb: Vec<[f32; 3]>,
-    weights: Vec<f32>,
-    trans: Vec<f32>,
-    d_occ: Vec<f32>,
-    d_rgb: Vec<[f32; 3]>,
 }
 
 fn ensure(buf: &mut Vec<f32>, len: usize) {
@@ -137,18 +128,11 @@ impl OccupancyNet {
         for h in &mut s.h {
             ensure(h, n * hp);
         }
-        for b in [&mut s.alpha_raw, &mut s.colour_raw, &mut s.d_alpha, &mut s.d_colour] {
-            ensure(b, n * 16);
-        }
+        s.heads.reserve(n);
         ensure(&mut s.p, n * hp);
         ensure(&mut s.q, n * hp);
         ensure(&mut s.d_geo, n * padded(GEO_DIMS));
         ensure(&mut s.d_col, n * padded(COL_DIMS));
-        for b in [&mut s.occ, &mut s.weights, &mut s.trans, &mut s.d_occ] {
-            ensure(b, n);
-        }
-        s.rgb.resize(n.max(s.rgb.len()), [0.0; 3]);
-        s.d_rgb.resize(n.max(s.d_rgb.len()), [0.0; 3]);
     }
 
     /// Forward pass of `points` into the scratch; the colour head only when `colour` is true.
@@ -189,12 +173,10 @@ impl OccupancyNet {
             packed,
             n,
             &[Rows { data: h4, ld: hp }],
-            &mut s.alpha_raw,
+            &mut s.heads.alpha_raw,
             Activation::Linear,
         );
-        for (o, a) in s.occ[..n].iter_mut().zip(s.alpha_raw.chunks_exact(16)) {
-            *o = sigmoid(ALPHA_SCALE * a[0]);
-        }
+        s.heads.occupancy_from_raw(n);
         if heads == Heads::OccupancyOnly {
             return;
         }
@@ -215,31 +197,25 @@ impl OccupancyNet {
             packed,
             n,
             &[Rows { data: h5, ld: hp }],
-            &mut s.colour_raw,
+            &mut s.heads.colour_raw,
             Activation::Linear,
         );
-        for (c, r) in s.rgb[..n].iter_mut().zip(s.colour_raw.chunks_exact(16)) {
-            *c = [sigmoid(r[0]), sigmoid(r[1]), sigmoid(r[2])];
-        }
+        s.heads.colour_from_raw(n);
     }
 
     /// Occupancy of the last forward pass (n values).
     pub(crate) fn occupancy<'a>(&self, s: &'a OccupancyScratch, n: usize) -> &'a [f32] {
-        &s.occ[..n]
+        s.heads.occupancy(n)
     }
 
     /// Raw α (= 10·raw) of the last forward pass.
     pub(crate) fn alpha(&self, s: &OccupancyScratch, n: usize) -> Vec<f32> {
-        s.alpha_raw
-            .chunks_exact(16)
-            .take(n)
-            .map(|a| ALPHA_SCALE * a[0])
-            .collect()
+        s.heads.alpha(n)
     }
 
     /// Colours of the last forward pass with [`Heads::All`].
     pub(crate) fn colour<'a>(&self, s: &'a OccupancyScratch, n: usize) -> &'a [[f32; 3]] {
-        &s.rgb[..n]
+        s.heads.colour(n)
     }
 }
 

@@ -1,9 +1,9 @@
 //! The fused training pass of the occupancy MLP on one chunk: forward, render, loss, backward.
 
-use super::super::chunk_loss::{ChunkHeads, HEAD_LD, render_loss_backward};
 use super::super::dense::Rows;
 use super::super::encoding::{self, COL_DIMS, EMB_LD, GEO_DIMS};
 use super::super::gemm::{Init, Post, padded};
+use super::super::heads::HEAD_LD;
 use super::super::loss::{FieldLosses, LossNorm};
 use super::super::samples::RaySamples;
 use super::super::simd::Backend;
@@ -29,21 +29,7 @@ impl OccupancyNet {
         let n = samples.len();
         let hp = self.hp();
         self.forward(backend, params, packed, scale, &rays.points[samples], s, Heads::All);
-        let losses = render_loss_backward(
-            rays,
-            rays_range,
-            norm,
-            ChunkHeads {
-                occ: &s.occ,
-                rgb: &s.rgb,
-                weights: &mut s.weights,
-                trans: &mut s.trans,
-                d_occ: &mut s.d_occ,
-                d_rgb: &mut s.d_rgb,
-                d_alpha: &mut s.d_alpha,
-                d_colour: &mut s.d_colour,
-            },
-        );
+        let losses = s.heads.render_loss_backward(rays, rays_range, norm);
 
         // Backward through the MLP, heads first.
         let [l1, l2, l3, l4, la, l5, lc] = &self.layers;
@@ -59,11 +45,11 @@ impl OccupancyNet {
         let (p, q) = (&mut s.p, &mut s.q);
         let (gp, cp) = (padded(GEO_DIMS), padded(COL_DIMS));
         let d_colour = Rows {
-            data: &s.d_colour,
+            data: &s.heads.d_colour,
             ld: HEAD_LD,
         };
         let d_alpha = Rows {
-            data: &s.d_alpha,
+            data: &s.heads.d_alpha,
             ld: HEAD_LD,
         };
         // out_color: p = d(h5 pre-activation)

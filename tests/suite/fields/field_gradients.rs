@@ -3,34 +3,10 @@
 //! step against a hand-computed update, and bit-identical results across thread counts.
 
 use candle_core::DType;
-use catmap::field::reference::occupancy_reference;
-use catmap::field::{AdamWConfig, Backend, FieldBatch, OccupancyField, ParamLayout, RaySamples};
+use catmap::field::reference::{occupancy_reference, worst_tensor_error};
+use catmap::field::{AdamWConfig, Backend, FieldBatch, OccupancyField, RaySamples};
 use catmap::ids::ObjectId;
 use catmap::rng::{RngStream, seeded_rng};
-
-/// Worst norm-relative error over tensors: ‖a − b‖ / max(‖b‖, 1e-2·‖b_all‖). The floor keeps a
-/// tensor whose gradient nearly cancels (a one-element bias summed over all samples) from turning
-/// f32 rounding into a large relative error; typical errors are 1e-7 … 1e-6.
-fn worst_tensor_error(layout: &ParamLayout, got: &[f32], want: &[f64]) -> (f64, String) {
-    let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
-    let all = norm(&mut want.iter().copied());
-    let mut worst = (0.0, String::new());
-    for t in layout.tensors() {
-        let diff = norm(&mut t.range().map(|i| f64::from(got[i]) - want[i]));
-        let reference = norm(&mut t.range().map(|i| want[i])).max(1e-2 * all);
-        let rel = diff / reference;
-        if std::env::var("FIELD_DEBUG").is_ok() {
-            eprintln!(
-                "{:>22}: rel {rel:.2e}  |ref| {reference:.3e}  |diff| {diff:.3e}",
-                t.name
-            );
-        }
-        if rel > worst.0 {
-            worst = (rel, t.name.clone());
-        }
-    }
-    worst
-}
 
 /// Scales the α head down by 10 so that occupancies stay away from 0 and 1. Saturated
 /// occupancies make `1 − o` cancel in f32 (as in PyTorch), and the f64 reference would then
