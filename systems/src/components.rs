@@ -137,17 +137,14 @@ pub struct FieldLoss {
     pub steps: u64,
 }
 
-/// The latest mesh extracted from the entity's field (world coordinates).
+/// The latest preview mesh extracted from the entity's field (world coordinates), for live
+/// viewing; the final meshes are returned by `Mapper::extract_final_meshes`, not stored.
 #[derive(Component, Debug, Clone, PartialEq)]
 pub struct FieldMesh {
     /// The mesh.
     pub mesh: catmap::geometry::mesh::TriangleMesh,
-    /// Training steps the field had taken when it was meshed.
-    pub at_step: u64,
-    /// Final resolution (`meshes.object`) rather than a preview.
-    pub is_final: bool,
-    /// Meshed from the object's category field (category mode) rather than its own field.
-    pub from_category: bool,
+    /// Which field it was extracted from.
+    pub source: catmap::training::MeshSource,
 }
 
 /// The object's uncertainty sphere as its class's latest registration used it, and what it was

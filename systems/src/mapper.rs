@@ -4,6 +4,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use bevy_ecs::prelude::*;
+use bevy_ecs::system::RunSystemOnce;
 use catmap::dataset::stream::{StreamMessage, StreamStats};
 use catmap::meshing::MapMeshes;
 use catmap::objects::keyframes::KeyframeWindow;
@@ -19,13 +20,10 @@ use crate::resources::{
     CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, SmallInstances, StageTimes,
     StreamProgress, TrainingQueue, TrainingSchedule,
 };
-use crate::schedule::{
-    build_after_stream_schedule, build_category_schedule, build_final_mesh_schedule, build_schedule,
-    build_training_schedule,
-};
+use crate::schedule::{build_after_stream_schedule, build_category_schedule, build_schedule, build_training_schedule};
 use crate::snapshot::MapSnapshot;
-use crate::stages::log_rerun::{Rerun, log_world_setup};
-use crate::stages::meshes::collect_meshes;
+use crate::stages::log_rerun::{Rerun, log_final_meshes, log_world_setup};
+use crate::stages::meshes::{final_meshes, map_meshes, warn_missing_meshes};
 
 mod after_stream;
 mod phase_chunks;
@@ -47,6 +45,9 @@ pub enum MapperError {
         /// What is wrong.
         reason: String,
     },
+    /// A one-shot system of the mapper could not run (one of its resources is missing).
+    #[error("{0}")]
+    System(String),
     /// `push` was called on a mapper fed by a reader thread, or after the end of the stream.
     #[error("this mapper does not accept pushed frames: {0}")]
     NotAccepting(&'static str),
@@ -59,7 +60,6 @@ pub struct Mapper {
     training: Schedule,
     category_training: Schedule,
     after_stream: Schedule,
-    final_meshes: Schedule,
     /// Sending end for `push`; `None` when a reader thread feeds the inbox, or after `end_stream`.
     pusher: Option<Sender<StreamMessage>>,
     /// Whether the category phase has run its first chunk (which creates the category fields).
@@ -114,7 +114,6 @@ impl Mapper {
             training: build_training_schedule(),
             category_training: build_category_schedule(),
             after_stream: build_after_stream_schedule(),
-            final_meshes: build_final_mesh_schedule(),
             pusher: None,
             category_phase_started: false,
         })
@@ -229,22 +228,21 @@ impl Mapper {
         self.world.resource::<TrainingQueue>().steps_done
     }
 
-    /// Meshes every field at final resolution (logged to Rerun when recording) and returns them.
-    pub fn extract_final_meshes(&mut self) -> MapMeshes {
-        self.final_meshes.run(&mut self.world);
-        let meshes = collect_meshes(&mut self.world);
-        crate::stages::meshes::warn_missing_meshes(&mut self.world, &meshes);
-        meshes
+    /// Meshes every field at final resolution (logged to Rerun when recording) and returns them;
+    /// warns about every object left without a mesh.
+    pub fn extract_final_meshes(&mut self) -> Result<MapMeshes, MapperError> {
+        let meshes = self.world.run_system_once(final_meshes).map_err(system_error)?;
+        self.world
+            .run_system_once_with(log_final_meshes, meshes.as_slice())
+            .map_err(system_error)?;
+        let meshes = map_meshes(meshes);
+        warn_missing_meshes(&mut self.world, &meshes);
+        Ok(meshes)
     }
 
     /// Every class's subcategories as registered so far (see `categories.json`).
     pub fn category_records(&mut self) -> Vec<crate::categories_report::ClassRecord> {
         crate::categories_report::category_records(&mut self.world)
-    }
-
-    /// The latest meshes (previews or final) of every field.
-    pub fn meshes(&mut self) -> MapMeshes {
-        collect_meshes(&mut self.world)
     }
 
     /// A read-only view of the map as it is now.
@@ -282,4 +280,9 @@ impl Mapper {
     pub fn world_mut(&mut self) -> &mut World {
         &mut self.world
     }
+}
+
+/// A one-shot system's failure as the mapper's error.
+fn system_error(e: bevy_ecs::system::RunSystemError) -> MapperError {
+    MapperError::System(e.to_string())
 }

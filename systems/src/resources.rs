@@ -8,7 +8,7 @@ use catmap::categories::field_set::CategoryFieldSet;
 use catmap::dataset::stream::{StreamMessage, StreamStats};
 use catmap::field::AdamWConfig;
 use catmap::sensor::frame::SharedFrame;
-use catmap::training::StreamPhase;
+use catmap::training::{FieldKey, PlateauConfig, StreamPhase};
 use catmap::{ClassId, FrameIndex, MapperConfig, ObjectId};
 use crossbeam_channel::{Receiver, TryRecvError};
 
@@ -233,6 +233,23 @@ pub struct TrainingSchedule {
     pub planned_objects: usize,
     /// Category fields in the latest plan.
     pub planned_categories: usize,
+}
+
+impl TrainingSchedule {
+    /// Records a batched step's per-field losses (in `keys` order) with the scheduler, or warns
+    /// that the step of `batch` was skipped.
+    pub fn record_step(
+        &mut self,
+        keys: &[FieldKey],
+        step: catmap::Result<Vec<f32>>,
+        plateau: &PlateauConfig,
+        batch: &str,
+    ) {
+        match step {
+            Ok(losses) => self.scheduler.record_step(keys, &losses, plateau),
+            Err(e) => tracing::warn!(error = %e, "{batch} training step skipped"),
+        }
+    }
 }
 
 /// The category fields and their members (`catmap::categories::field_set`), and the steps

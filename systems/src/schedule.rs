@@ -13,7 +13,7 @@ use crate::stages::log_rerun::{
     Rerun, log_camera_frames, log_field_losses, log_field_meshes, log_instance_legend, log_memberships,
     log_object_boxes, log_object_clouds,
 };
-use crate::stages::meshes::{extract_final_meshes, extract_preview_meshes};
+use crate::stages::meshes::extract_preview_meshes;
 use crate::stages::register::register_categories;
 use crate::stages::segment::observe_frames;
 use crate::stages::track::{record_background_views, record_object_views, spawn_new_objects};
@@ -154,19 +154,6 @@ pub fn build_after_stream_schedule() -> Schedule {
         (log_field_losses, log_memberships, log_category_training)
             .chain()
             .after(sync_category_fields)
-            .run_if(resource_exists::<Rerun>),
-    ));
-    schedule
-}
-
-/// The schedule that meshes every field at final resolution and logs the meshes.
-pub fn build_final_mesh_schedule() -> Schedule {
-    let mut schedule = Schedule::default();
-    schedule.set_executor(SingleThreadedExecutor::new());
-    schedule.add_systems((
-        extract_final_meshes,
-        log_field_meshes
-            .after(extract_final_meshes)
             .run_if(resource_exists::<Rerun>),
     ));
     schedule

@@ -22,7 +22,7 @@ pub fn write_outputs(mut mapper: Mapper, plan: &RunPlan, dataset_name: String, s
         let path = plan.out.join("categories.json");
         catmap_systems::categories_report::write_category_records(&mapper.category_records(), &path)?;
         tracing::info!(path = %path.display(), "categories written");
-        let meshes = mapper.extract_final_meshes();
+        let meshes = mapper.extract_final_meshes()?;
         let dir = plan.out.join("meshes");
         let written = meshes.write_dir(&dir)?;
         tracing::info!(files = written, dir = %dir.display(), "meshes written");

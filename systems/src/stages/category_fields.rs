@@ -92,13 +92,8 @@ pub fn train_category_fields(
         if plan.indices.is_empty() {
             continue;
         }
-        let sampled = sample_members(&mut members, &plan.indices, &rays);
-        match fields.train_step(&plan, sampled) {
-            Ok(losses) => schedule
-                .scheduler
-                .record_step(&plan.keys, &losses, &config.schedule.plateau),
-            Err(e) => tracing::warn!(error = %e, "category training step skipped"),
-        }
+        let step = fields.train_step(&plan, sample_members(&mut members, &plan.indices, &rays));
+        schedule.record_step(&plan.keys, step, &config.schedule.plateau, "category");
         fields.steps_done += 1;
     }
 }

@@ -17,7 +17,9 @@ use std::collections::BTreeMap;
 
 use bevy_ecs::prelude::*;
 use catmap::dataset::classes::replica_name;
+use catmap::geometry::mesh::TriangleMesh;
 use catmap::sensor::image_ops::{downscale_nearest, downscale_rgb};
+use catmap::training::MeshSource;
 use catmap::{ClassId, InstanceLabel, ObjectId, RgbdFrame};
 use image::ImageEncoder;
 
@@ -26,6 +28,7 @@ use crate::components::{
 };
 use crate::rerun_paths::{self as paths, OwnerEntity};
 use crate::resources::{Settings, StreamProgress};
+use crate::stages::meshes::OwnerMesh;
 
 /// The recording stream every log system writes to.
 #[derive(Resource, Clone)]
@@ -215,8 +218,7 @@ pub fn log_field_losses(
     }
 }
 
-/// Logs each newly extracted field mesh: with the field's colours, or, when it comes from a
-/// category field, in the colour of the object's subcategory (as its aligned box).
+/// Logs each newly extracted preview mesh (see [`log_owner_mesh`]).
 pub fn log_field_meshes(
     rerun: Res<Rerun>,
     progress: Res<StreamProgress>,
@@ -226,27 +228,55 @@ pub fn log_field_meshes(
         rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.0 as i64);
     }
     for (object, mesh, membership) in &owners {
-        let path = paths::of(object.map(|o| o.id), OwnerEntity::Mesh);
-        let m = &mesh.mesh;
-        if m.is_empty() {
-            warn_on_error(rerun.0.log(path.as_str(), &rerun::Clear::flat()), &path);
-            continue;
-        }
-        let mut archetype = rerun::Mesh3D::new(m.vertices.iter().map(|v| [v.x, v.y, v.z]))
-            .with_triangle_indices(m.triangles.iter().map(|t| rerun::TriangleIndices::from(*t)));
-        match (membership.filter(|_| mesh.from_category), &m.colors) {
-            (Some(membership), _) => {
-                let [r, g, b] = SUBCATEGORY_PALETTE[membership.subcategory % SUBCATEGORY_PALETTE.len()];
-                archetype = archetype.with_albedo_factor(rerun::datatypes::Rgba32::from_rgb(r, g, b));
-            }
-            (None, Some(colors)) => {
-                archetype =
-                    archetype.with_vertex_colors(colors.iter().map(|[r, g, b]| rerun::Color::from_rgb(*r, *g, *b)));
-            }
-            (None, None) => {}
-        }
-        warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
+        log_owner_mesh(&rerun, object.map(|o| o.id), &mesh.mesh, mesh.source, membership);
     }
+}
+
+/// Logs the final meshes when the mapper records (run once, by `Mapper::extract_final_meshes`).
+pub fn log_final_meshes(
+    InRef(meshes): InRef<[OwnerMesh]>,
+    rerun: Option<Res<Rerun>>,
+    progress: Res<StreamProgress>,
+    memberships: Query<&Membership>,
+) {
+    let Some(rerun) = rerun else { return };
+    if let Some(frame) = progress.last_frame {
+        rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.0 as i64);
+    }
+    for owned in meshes {
+        let membership = memberships.get(owned.entity).ok();
+        log_owner_mesh(&rerun, owned.object, &owned.mesh, owned.source, membership);
+    }
+}
+
+/// Logs one field mesh at its owner's mesh path: with the field's colours, or, when it comes
+/// from a category field, in the colour of the object's subcategory (as its aligned box); an
+/// empty mesh clears the path.
+fn log_owner_mesh(
+    rerun: &Rerun,
+    object: Option<ObjectId>,
+    mesh: &TriangleMesh,
+    source: MeshSource,
+    membership: Option<&Membership>,
+) {
+    let path = paths::of(object, OwnerEntity::Mesh);
+    if mesh.is_empty() {
+        warn_on_error(rerun.0.log(path.as_str(), &rerun::Clear::flat()), &path);
+        return;
+    }
+    let mut archetype = rerun::Mesh3D::new(mesh.vertices.iter().map(|v| [v.x, v.y, v.z]))
+        .with_triangle_indices(mesh.triangles.iter().map(|t| rerun::TriangleIndices::from(*t)));
+    match (membership.filter(|_| source == MeshSource::CategoryField), &mesh.colors) {
+        (Some(membership), _) => {
+            let [r, g, b] = SUBCATEGORY_PALETTE[membership.subcategory % SUBCATEGORY_PALETTE.len()];
+            archetype = archetype.with_albedo_factor(rerun::datatypes::Rgba32::from_rgb(r, g, b));
+        }
+        (None, Some(colors)) => {
+            archetype = archetype.with_vertex_colors(colors.iter().map(|[r, g, b]| rerun::Color::from_rgb(*r, *g, *b)));
+        }
+        (None, None) => {}
+    }
+    warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
 }
 
 /// Logs each re-registered object's aligned box (coloured by subcategory, the representative

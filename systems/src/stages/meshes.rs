@@ -3,6 +3,7 @@
 use bevy_ecs::prelude::*;
 use catmap::geometry::mesh::{Aabb, TriangleMesh};
 use catmap::meshing::{MapMeshes, ObjectFrame, ObjectMeshConfig, mesh_category_member, mesh_occupancy_field};
+use catmap::training::MeshSource;
 use catmap::{FrameIndex, ObjectId};
 use rayon::prelude::*;
 
@@ -28,9 +29,22 @@ type Meshable<'w, 's> = Query<
     ),
 >;
 
+/// A mesh extracted from a field, with the entity that owns it.
+#[derive(Debug, Clone)]
+pub struct OwnerMesh {
+    /// The object's or the background's entity.
+    pub entity: Entity,
+    /// The object's id; `None` for the background.
+    pub object: Option<ObjectId>,
+    /// The mesh (world coordinates).
+    pub mesh: TriangleMesh,
+    /// Which field it was extracted from.
+    pub source: MeshSource,
+}
+
 /// Every `preview_every_frames` ingested frames, meshes each trained object field at the preview
-/// spacing (for live viewing; the background is only meshed at the end). Members of category
-/// fields (online category mode) are meshed from their category field.
+/// spacing into its [`FieldMesh`] (for live viewing; the background is only meshed at the end).
+/// Members of category fields (online category mode) are meshed from their category field.
 pub fn extract_preview_meshes(
     settings: Res<Settings>,
     progress: Res<StreamProgress>,
@@ -51,38 +65,29 @@ pub fn extract_preview_meshes(
     let _timer = times.start("meshes");
     let config = settings.0.meshes.preview();
     let meshes = mesh_fields(&fields, &owners, &config, &config, MeshPass::Preview);
-    insert_meshes(
-        meshes,
-        &category_fields,
-        &members,
-        &config,
-        MeshPass::Preview,
-        &mut commands,
-    );
+    for OwnerMesh {
+        entity, mesh, source, ..
+    } in with_category_members(meshes, &category_fields, &members, &config)
+    {
+        commands.entity(entity).insert(FieldMesh { mesh, source });
+    }
 }
 
 /// Meshes every field at final resolution (`meshes.object`; the background at
-/// `meshes.background_voxel_m` over its cloud's bounds).
-pub fn extract_final_meshes(
+/// `meshes.background_voxel_m` over its cloud's bounds) and returns the meshes (run once, by
+/// `Mapper::extract_final_meshes`).
+pub fn final_meshes(
     settings: Res<Settings>,
     fields: Res<Fields>,
     category_fields: Res<CategoryFields>,
     owners: Meshable,
     members: Query<(Entity, &Object, &CategorySlot)>,
     mut times: ResMut<StageTimes>,
-    mut commands: Commands,
-) {
+) -> Vec<OwnerMesh> {
     let _timer = times.start("meshes");
     let cfg = &settings.0.meshes;
     let meshes = mesh_fields(&fields, &owners, &cfg.object, &cfg.background(), MeshPass::Final);
-    insert_meshes(
-        meshes,
-        &category_fields,
-        &members,
-        &cfg.object,
-        MeshPass::Final,
-        &mut commands,
-    );
+    with_category_members(meshes, &category_fields, &members, &cfg.object)
 }
 
 /// Which meshes a meshing pass makes.
@@ -94,30 +99,17 @@ enum MeshPass {
     Final,
 }
 
-/// Inserts `meshes` as the owners' [`FieldMesh`]es, the category members' replaced by the mesh
-/// of their category field.
-fn insert_meshes(
-    mut meshes: Vec<(Entity, TriangleMesh, u64)>,
+/// `meshes` with the category members' replaced by the meshes of their category fields.
+fn with_category_members(
+    mut meshes: Vec<OwnerMesh>,
     category_fields: &CategoryFields,
     members: &Query<(Entity, &Object, &CategorySlot)>,
     config: &ObjectMeshConfig,
-    pass: MeshPass,
-    commands: &mut Commands,
-) {
+) -> Vec<OwnerMesh> {
     let from_categories = mesh_category_members(category_fields, members, config);
-    meshes.retain(|(entity, ..)| !from_categories.iter().any(|(e, ..)| e == entity));
-    let tagged = meshes
-        .into_iter()
-        .map(|m| (m, false))
-        .chain(from_categories.into_iter().map(|m| (m, true)));
-    for ((entity, mesh, at_step), from_category) in tagged {
-        commands.entity(entity).insert(FieldMesh {
-            mesh,
-            at_step,
-            is_final: pass == MeshPass::Final,
-            from_category,
-        });
-    }
+    meshes.retain(|own| !from_categories.iter().any(|member| member.entity == own.entity));
+    meshes.extend(from_categories);
+    meshes
 }
 
 /// Meshes every member of a category field over its NOCS frame (members in id order).
@@ -125,14 +117,19 @@ fn mesh_category_members(
     fields: &CategoryFields,
     members: &Query<(Entity, &Object, &CategorySlot)>,
     config: &ObjectMeshConfig,
-) -> Vec<(Entity, TriangleMesh, u64)> {
+) -> Vec<OwnerMesh> {
     let mut work: Vec<_> = members.iter().collect();
     work.sort_by_key(|(_, object, _)| object.id);
     work.par_iter()
         .filter_map(|&(entity, object, slot)| {
             let field = fields.batch.field(slot.field)?;
             match mesh_category_member(field, slot.member, &slot.nocs, config) {
-                Ok(mesh) => Some((entity, mesh, fields.steps_done)),
+                Ok(mesh) => Some(OwnerMesh {
+                    entity,
+                    object: Some(object.id),
+                    mesh,
+                    source: MeshSource::CategoryField,
+                }),
                 Err(e) => {
                     tracing::warn!(object = %object.id, error = %e, "category meshing failed");
                     None
@@ -149,7 +146,7 @@ fn mesh_fields(
     object_config: &ObjectMeshConfig,
     background_config: &ObjectMeshConfig,
     pass: MeshPass,
-) -> Vec<(Entity, TriangleMesh, u64)> {
+) -> Vec<OwnerMesh> {
     let mut work: Vec<_> = owners
         .iter()
         .filter(|(_, _, is_background, member, _, loss, ..)| {
@@ -158,7 +155,7 @@ fn mesh_fields(
         .collect();
     work.sort_by_key(|(_, object, ..)| object.map(|o| o.id));
     work.par_iter()
-        .filter_map(|&(entity, object, is_background, _, slot, loss, bounds, cloud)| {
+        .filter_map(|&(entity, object, is_background, _, slot, _, bounds, cloud)| {
             let (field, frame, config) = if is_background {
                 let frame = ObjectFrame::from_aabb(&Aabb::from_points(cloud.0.points().iter())?);
                 (fields.background.field(slot.index)?, frame, background_config)
@@ -167,7 +164,12 @@ fn mesh_fields(
                 (fields.objects.field(slot.index)?, frame, object_config)
             };
             match mesh_occupancy_field(field, &slot.origin, &frame, config) {
-                Ok(mesh) => Some((entity, mesh, loss.steps)),
+                Ok(mesh) => Some(OwnerMesh {
+                    entity,
+                    object: object.map(|o| o.id),
+                    mesh,
+                    source: MeshSource::OwnField,
+                }),
                 Err(e) => {
                     let who = object.map_or_else(|| "background".to_owned(), |o| o.id.to_string());
                     tracing::warn!(owner = %who, error = %e, "meshing failed");
@@ -178,20 +180,18 @@ fn mesh_fields(
         .collect()
 }
 
-/// The latest meshes of the map, by object id, and the background's.
-pub fn collect_meshes(world: &mut World) -> MapMeshes {
-    let mut meshes = MapMeshes::default();
-    let mut query = world.query::<(Option<&Object>, Has<Background>, &FieldMesh)>();
-    for (object, is_background, mesh) in query.iter(world) {
-        match (object, is_background) {
-            (Some(object), _) => {
-                meshes.objects.insert(object.id, mesh.mesh.clone());
+/// The map's meshes: objects by id, and the background's.
+pub fn map_meshes(meshes: Vec<OwnerMesh>) -> MapMeshes {
+    let mut map = MapMeshes::default();
+    for OwnerMesh { object, mesh, .. } in meshes {
+        match object {
+            Some(id) => {
+                map.objects.insert(id, mesh);
             }
-            (None, true) => meshes.background = Some(mesh.mesh.clone()),
-            (None, false) => {}
+            None => map.background = Some(mesh),
         }
     }
-    meshes
+    map
 }
 
 /// Warns about a map without objects and about every object left without a final mesh (too

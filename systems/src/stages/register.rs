@@ -44,19 +44,9 @@ pub fn register_categories(
     );
     for (entity, category, previous) in &mut categories {
         let class = category.class;
-        let members: Vec<_> = category
-            .members
-            .iter()
-            .map(|id| class_member(*id, &index, &objects))
-            .collect();
-        let registered = previous.as_ref().map(|p| &p.registered_points);
-        if class_readiness(&members, registered, steps, growth) != ClassReadiness::Due {
+        let Some((members, last)) = due_class(category, previous.as_deref(), &index, &objects, steps, growth) else {
             continue;
-        }
-        let last = previous
-            .as_ref()
-            .map_or_else(ClassRegistration::default, |p| p.registration());
-        let members: Vec<ClassMember> = members.into_iter().flatten().collect();
+        };
         match update_class(class, &members, &last, &fields.objects, &config.categories, config.seed) {
             Ok(update) => {
                 times.add("uncertainty", update.uncertainty_time);
@@ -72,6 +62,29 @@ pub fn register_categories(
             Err(e) => tracing::warn!(class = %class, error = %e, "class registration failed"),
         }
     }
+}
+
+/// The class's members and its latest registration when the class is due for registration
+/// (`class_readiness`); `None` otherwise.
+fn due_class<'a>(
+    category: &Category,
+    previous: Option<&Subcategories>,
+    index: &ObjectIndex,
+    objects: &'a Query<MemberParts>,
+    steps: u64,
+    growth: f32,
+) -> Option<(Vec<ClassMember<'a>>, ClassRegistration)> {
+    let members: Vec<_> = category
+        .members
+        .iter()
+        .map(|id| class_member(*id, index, objects))
+        .collect();
+    let registered = previous.map(|p| &p.registered_points);
+    if class_readiness(&members, registered, steps, growth) != ClassReadiness::Due {
+        return None;
+    }
+    let last = previous.map_or_else(ClassRegistration::default, |p| p.registration());
+    Some((members.into_iter().flatten().collect(), last))
 }
 
 /// Member `id` as registration reads it: `None` until it has a box and a field.

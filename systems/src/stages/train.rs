@@ -131,18 +131,14 @@ pub fn train_fields(
     schedule.planned_objects = plan.indices.len();
     for _ in 0..std::mem::take(&mut queue.pending) {
         if !plan.indices.is_empty() {
-            match train_one(
+            let step = train_one(
                 &mut owners,
                 FieldOwner::Objects,
                 &plan,
                 &mut fields.objects,
                 &cfg.object_rays,
-            ) {
-                Ok(losses) => schedule
-                    .scheduler
-                    .record_step(&plan.keys, &losses, &config.schedule.plateau),
-                Err(e) => tracing::warn!(error = %e, "object training step skipped"),
-            }
+            );
+            schedule.record_step(&plan.keys, step, &config.schedule.plateau, "object");
         }
         if cfg.background_due(queue.steps_done) && !fields.background.is_empty() {
             let (plan, batch) = (BatchPlan::background(), &mut fields.background);

@@ -48,7 +48,7 @@ fn completion_per_object(
         usize::from(category_steps > 0),
         "one category field: the three chairs"
     );
-    let meshes = mapper.extract_final_meshes();
+    let meshes = mapper.extract_final_meshes().expect("final meshes");
     scene
         .objects()
         .iter()

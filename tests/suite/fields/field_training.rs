@@ -134,7 +134,7 @@ fn final_meshes(offline_steps: usize) -> MapMeshes {
     let mut mapper = Mapper::new(config).expect("config");
     stream_scene(&mut mapper, &scene);
     assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
-    mapper.extract_final_meshes()
+    mapper.extract_final_meshes().expect("final meshes")
 }
 
 #[test]

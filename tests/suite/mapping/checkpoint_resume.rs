@@ -103,7 +103,7 @@ fn run(scene: &SyntheticScene, stops: &[Stop]) -> (MapMeshes, String, String) {
     assert_eq!(stopped, wanted, "the run paused where asked, once each");
     assert_eq!(mapper.category_field_count(), 1, "the three chairs share a field");
     let categories = serde_json::to_string(&mapper.category_records()).expect("serialises");
-    let meshes = mapper.extract_final_meshes();
+    let meshes = mapper.extract_final_meshes().expect("final meshes");
     let map = serde_json::to_string(&mapper.snapshot()).expect("serialises");
     (meshes, categories, map)
 }

@@ -97,7 +97,7 @@ fn a_scene_without_objects_maps_only_the_background() {
     let mut frames = small_frames(0..4);
     frames.iter_mut().for_each(|f| erase_objects(f, |_| false));
     let mut mapper = map_frames(frames);
-    let (meshes, warnings) = with_warnings(|| mapper.extract_final_meshes());
+    let (meshes, warnings) = with_warnings(|| mapper.extract_final_meshes().expect("final meshes"));
     assert!(
         meshes.objects.is_empty(),
         "no object meshes: {:?}",
@@ -118,7 +118,7 @@ fn an_object_seen_in_one_frame_still_gets_a_mesh() {
         erase_objects(frame, |id| k == 0 && id == only);
     }
     let mut mapper = map_frames(frames);
-    let meshes = mapper.extract_final_meshes();
+    let meshes = mapper.extract_final_meshes().expect("final meshes");
     assert_eq!(
         meshes.objects.keys().copied().collect::<Vec<_>>(),
         [only],
@@ -145,7 +145,7 @@ fn an_object_with_a_handful_of_pixels_gets_no_mesh_and_the_rest_map() {
         }
     }
     let mut mapper = map_frames(frames);
-    let (meshes, warnings) = with_warnings(|| mapper.extract_final_meshes());
+    let (meshes, warnings) = with_warnings(|| mapper.extract_final_meshes().expect("final meshes"));
     assert!(!meshes.objects.contains_key(&tiny), "5 pixels cannot make a mesh");
     assert!(!meshes.objects.is_empty(), "the other objects still get meshes");
     let map = mapper.finish();
@@ -164,7 +164,7 @@ fn frames_without_depth_are_ingested_and_map_nothing() {
     let mut frames = small_frames(0..4);
     frames.iter_mut().for_each(|f| f.depth_m.fill(0.0));
     let mut mapper = map_frames(frames);
-    let (meshes, warnings) = with_warnings(|| mapper.extract_final_meshes());
+    let (meshes, warnings) = with_warnings(|| mapper.extract_final_meshes().expect("final meshes"));
     assert!(meshes.objects.is_empty(), "no depth, no object meshes");
     let records = mapper.category_records();
     assert!(
@@ -191,7 +191,7 @@ fn some_frames_without_depth_do_not_spoil_the_others() {
     let mut frames = small_frames(0..6);
     frames.iter_mut().step_by(2).for_each(|f| f.depth_m.fill(0.0));
     let mut mapper = map_frames(frames);
-    let meshes = mapper.extract_final_meshes();
+    let meshes = mapper.extract_final_meshes().expect("final meshes");
     assert!(!meshes.objects.is_empty(), "frames with depth still give meshes");
 }
 
@@ -206,7 +206,7 @@ fn a_camera_that_never_moves_maps_what_it_sees() {
         .collect();
     let seen = objects_in(&frames[0]);
     let mut mapper = map_frames(frames);
-    let meshes = mapper.extract_final_meshes();
+    let meshes = mapper.extract_final_meshes().expect("final meshes");
     assert!(!meshes.objects.is_empty(), "objects seen from one pose get meshes");
     let map = mapper.finish();
     assert_eq!(map.objects.len(), seen.len(), "no duplicates from repeated views");
@@ -232,7 +232,7 @@ fn a_class_with_one_object_keeps_its_instance_field() {
         0,
         "one member per class needs no category field"
     );
-    let meshes = mapper.extract_final_meshes();
+    let meshes = mapper.extract_final_meshes().expect("final meshes");
     assert!(
         meshes.objects.contains_key(&lone),
         "the lone chair is meshed from its own field"
@@ -267,7 +267,7 @@ fn identical_objects_are_one_class_and_all_get_meshes() {
         .iter_mut()
         .for_each(|f| erase_objects(f, |id| same.contains(&id)));
     let mut mapper = map_frames(frames);
-    let meshes = mapper.extract_final_meshes();
+    let meshes = mapper.extract_final_meshes().expect("final meshes");
     let records = mapper.category_records();
     assert_eq!(records.len(), 1, "one class: {records:?}");
     let mut members: Vec<ObjectId> = records[0]
@@ -327,7 +327,7 @@ fn a_stream_that_stops_mid_frame_keeps_what_was_mapped() {
     assert_eq!(outcome, RunOutcome::Complete);
     assert!(warnings.contains("truncated"), "the error is reported: {warnings}");
     assert!(
-        !mapper.extract_final_meshes().objects.is_empty(),
+        !mapper.extract_final_meshes().expect("final meshes").objects.is_empty(),
         "the first frames are meshed"
     );
     let map = mapper.finish();

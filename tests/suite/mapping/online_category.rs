@@ -5,6 +5,7 @@
 use catmap::config::FieldConfig;
 use catmap::dataset::FrameSource;
 use catmap::synth::{Preset, SyntheticScene};
+use catmap::training::MeshSource;
 use catmap::{MapperConfig, ObjectId};
 use catmap_systems::Mapper;
 use catmap_systems::components::CategorySlot;
@@ -81,7 +82,7 @@ fn category_fields_start_and_train_while_the_scene_streams() {
         .world_mut()
         .query::<(&Object, &FieldMesh, Option<&CategorySlot>)>()
         .iter(mapper.world())
-        .map(|(o, m, slot)| (o.id, m.from_category, slot.is_some()))
+        .map(|(o, m, slot)| (o.id, m.source == MeshSource::CategoryField, slot.is_some()))
         .collect();
     assert!(previews.len() >= 5, "previews: {previews:?}");
     for (id, from_category, member) in previews {

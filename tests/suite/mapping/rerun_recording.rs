@@ -60,6 +60,8 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         mapper.step();
         assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
         assert_eq!(mapper.category_field_count(), 1, "one category field");
+        let meshes = mapper.extract_final_meshes().expect("final meshes");
+        assert!(meshes.background.is_some(), "the background field is meshed at the end");
         let map = mapper.finish();
         assert!(map.objects.len() >= 3, "the small scene maps several objects");
     }
@@ -104,6 +106,10 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
     assert!(
         paths.contains("world/background/loss"),
         "the background's loss is logged"
+    );
+    assert!(
+        paths.contains("world/background/mesh"),
+        "the final meshes are logged (the background is only meshed at the end): {paths:?}"
     );
 }
 
