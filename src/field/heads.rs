@@ -7,9 +7,11 @@
 use std::ops::Range;
 
 use super::loss::{FieldLosses, LossNorm, ray_loss};
-use super::occupancy::ALPHA_SCALE;
 use super::render::{render_ray, render_ray_backward, sigmoid};
 use super::samples::RaySamples;
+
+/// α = ALPHA_SCALE · raw α head output (vMAP's "unisurf" scaling), in every network.
+pub const ALPHA_SCALE: f32 = 10.0;
 
 /// Row stride of the raw head outputs and their gradients (one padded row per sample).
 pub(crate) const HEAD_LD: usize = 16;

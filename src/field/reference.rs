@@ -9,9 +9,9 @@ use candle_core::{DType, Device, Tensor, Var};
 
 use super::directions::NUM_DIRECTIONS;
 use super::encoding::{GEO_DIMS, NUM_BANDS};
+use super::heads::ALPHA_SCALE;
 use super::layout::ParamLayout;
 use super::loss::{COLOUR_WEIGHT, DEPTH_STD_EPS, OPACITY_WEIGHT};
-use super::occupancy::ALPHA_SCALE;
 use super::render::FREE_EPS;
 use super::samples::RaySamples;
 use crate::error::{CatmapError, Result};

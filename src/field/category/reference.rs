@@ -11,8 +11,8 @@ use candle_core::{DType, Device, Tensor, Var, backprop::GradStore};
 
 use super::super::directions::NUM_DIRECTIONS;
 use super::super::encoding::{GEO_DIMS, NUM_BANDS};
+use super::super::heads::ALPHA_SCALE;
 use super::super::loss::{COLOUR_WEIGHT, DEPTH_STD_EPS, OPACITY_WEIGHT};
-use super::super::occupancy::ALPHA_SCALE;
 use super::super::reference::{ce, column, linear, sigmoid, vars};
 use super::super::render::FREE_EPS;
 use super::super::samples::RaySamples;

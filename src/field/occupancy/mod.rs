@@ -26,9 +26,6 @@ use super::heads::HeadBuffers;
 use super::layout::ParamLayout;
 use super::simd::Backend;
 
-/// α = ALPHA_SCALE · raw (vMAP's "unisurf" scaling).
-pub const ALPHA_SCALE: f32 = 10.0;
-
 /// The packed occupancy network of one hidden width.
 #[derive(Debug, Clone)]
 pub struct OccupancyNet {
