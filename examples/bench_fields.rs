@@ -17,12 +17,11 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use candle_core::{Device, Tensor};
-use catmap::field::bench::{CandleMlpBatch, MlpBatch};
+use catmap::field::bench::{CandleMlpBatch, MlpBatch, random_rows};
 use catmap::field::{AdamWConfig, Backend, FieldBatch, GEO_DIMS, OccupancyField, RaySamples};
 use catmap::ids::ObjectId;
 use catmap::rng::{RngStream, seeded_rng};
 use clap::Parser;
-use rand::RngExt;
 
 /// Arguments.
 #[derive(Parser, Debug)]
@@ -102,12 +101,8 @@ fn bench_mlp(args: &Args) -> anyhow::Result<()> {
     let (count, points) = (16, 1200);
     let mut rng = seeded_rng(args.seed, RngStream::Mapper);
     let mut mlps = MlpBatch::new(&dims, count, AdamWConfig::adam(1e-3), &mut rng)?;
-    let inputs: Vec<Vec<f32>> = (0..count)
-        .map(|_| (0..points * 39).map(|_| rng.random_range(-1.0..1.0)).collect())
-        .collect();
-    let targets: Vec<Vec<f32>> = (0..count)
-        .map(|_| (0..points * 4).map(|_| rng.random_range(-1.0..1.0)).collect())
-        .collect();
+    let inputs = random_rows(&mut rng, count, points * 39);
+    let targets = random_rows(&mut rng, count, points * 4);
     let flops = mlp_step_flops(&dims, count, points);
     let xs: Vec<&[f32]> = inputs.iter().map(Vec::as_slice).collect();
     let ts: Vec<&[f32]> = targets.iter().map(Vec::as_slice).collect();

@@ -5,7 +5,7 @@
 //! `L_b = mean_{points, outputs} |y − target|`; the step applies AdamW per MLP.
 //! Inputs are row-major `[N × d0]`, targets `[N × dL]`.
 
-use rand::Rng;
+use rand::{Rng, RngExt};
 use rayon::prelude::*;
 
 use super::super::adamw::{AdamWConfig, AdamWState};
@@ -286,10 +286,17 @@ fn train_chunk(
     loss
 }
 
+/// `count` rows of `len` values drawn uniformly from [−1, 1): the benchmark's random inputs or
+/// targets.
+pub fn random_rows(rng: &mut impl Rng, count: usize, len: usize) -> Vec<Vec<f32>> {
+    (0..count)
+        .map(|_| (0..len).map(|_| rng.random_range(-1.0..1.0)).collect())
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use candle_core::DType;
-    use rand::RngExt;
 
     use super::*;
     use crate::field::bench::mlp_reference;
@@ -302,12 +309,8 @@ mod tests {
         for (count, points) in [(1, 50), (3, 200), (2, 1200)] {
             let mut rng = seeded_rng(9, RngStream::Mapper);
             let mut mlps = MlpBatch::new(&dims, count, AdamWConfig::adam(1e-3), &mut rng).expect("valid widths");
-            let inputs: Vec<Vec<f32>> = (0..count)
-                .map(|_| (0..points * 39).map(|_| rng.random_range(-1.0..1.0)).collect())
-                .collect();
-            let targets: Vec<Vec<f32>> = (0..count)
-                .map(|_| (0..points * 4).map(|_| rng.random_range(-1.0..1.0)).collect())
-                .collect();
+            let inputs = random_rows(&mut rng, count, points * 39);
+            let targets = random_rows(&mut rng, count, points * 4);
             let xs: Vec<&[f32]> = inputs.iter().map(Vec::as_slice).collect();
             let ts: Vec<&[f32]> = targets.iter().map(Vec::as_slice).collect();
             let (losses, grads) = mlps.loss_and_gradients(&xs, &ts).expect("shapes agree");

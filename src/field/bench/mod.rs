@@ -7,4 +7,4 @@ mod candle_mlp;
 mod mlp;
 
 pub use candle_mlp::{CandleMlpBatch, mlp_reference};
-pub use mlp::MlpBatch;
+pub use mlp::{MlpBatch, random_rows};

@@ -4,7 +4,8 @@
 
 use candle_core::DType;
 use catmap::field::category::reference::category_reference;
-use catmap::field::{AdamWConfig, Backend, CategoryBatch, CategoryField, CategorySamples, ParamLayout, RaySamples};
+use catmap::field::reference::worst_tensor_error;
+use catmap::field::{AdamWConfig, Backend, CategoryBatch, CategoryField, CategorySamples, RaySamples};
 use catmap::ids::ObjectId;
 use catmap::objects::object_view::PixelState;
 use catmap::rng::{RngStream, seeded_rng};
@@ -12,7 +13,7 @@ use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
 /// ‖a − b‖ / max(‖b‖, 1e-2·‖b_all‖): norm-relative error with a floor for near-cancelling tensors
-/// (as in `field_gradients.rs`).
+/// (as `worst_tensor_error` measures a tensor; here for the members' codes).
 fn relative_error(got: &[f32], want: &[f64], all_norm: f64) -> f64 {
     let diff = got
         .iter()
@@ -28,16 +29,10 @@ fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
-/// Scales the α head down by 10 so that occupancies stay away from 0 and 1 (see
-/// `field_gradients.rs::well_conditioned`).
+/// The field with its α head scaled down by 10 (see [`super::scale_tensors`]).
 fn well_conditioned(mut field: CategoryField) -> CategoryField {
     let layout = field.layout();
-    for name in ["sigma.weight", "sigma.bias"] {
-        let range = layout.get(name).expect("the category layout has an α head").range();
-        for p in &mut field.params_mut()[range] {
-            *p *= 0.1;
-        }
-    }
+    super::scale_tensors(field.params_mut(), &layout, &["sigma.weight", "sigma.bias"], 0.1);
     field
 }
 
@@ -83,19 +78,11 @@ fn check_against_candle(seed: u64, members: &[usize], code_dim: usize, rays: usi
             close(f.depth, reference.depth) && close(f.colour, reference.colour) && close(f.opacity, reference.opacity),
             "category {c}: loss terms {f:?} vs {reference:?}"
         );
-        let layout: ParamLayout = field.layout();
-        let all = norm(&reference.grad);
-        for t in layout.tensors() {
-            let rel = relative_error(&grads[c].weights[t.range()], &reference.grad[t.range()], all);
-            if std::env::var("FIELD_DEBUG").is_ok() {
-                eprintln!("{} category {c} {:>26}: rel {rel:.2e}", backend.name(), t.name);
-            }
-            assert!(
-                rel <= 1e-4,
-                "{backend:?} category {c}: gradient of {} off by {rel:.2e}",
-                t.name
-            );
-        }
+        let (worst, tensor) = worst_tensor_error(&field.layout(), &grads[c].weights, &reference.grad);
+        assert!(
+            worst <= 1e-4,
+            "{backend:?} category {c}: gradient of {tensor} off by {worst:.2e}"
+        );
         let all_codes: Vec<f64> = reference.code_grads.concat();
         for (m, want) in reference.code_grads.iter().enumerate() {
             let rel = relative_error(&grads[c].codes[m], want, norm(&all_codes));

@@ -8,17 +8,15 @@ use catmap::field::{AdamWConfig, Backend, FieldBatch, OccupancyField, RaySamples
 use catmap::ids::ObjectId;
 use catmap::rng::{RngStream, seeded_rng};
 
-/// Scales the α head down by 10 so that occupancies stay away from 0 and 1. Saturated
-/// occupancies make `1 − o` cancel in f32 (as in PyTorch), and the f64 reference would then
-/// measure f32 conditioning rather than the gradient code.
+/// The field with its α head scaled down by 10 (see [`super::scale_tensors`]).
 fn well_conditioned(mut field: OccupancyField) -> OccupancyField {
     let layout = field.layout();
-    for name in ["out_alpha.weight", "out_alpha.bias"] {
-        let range = layout.get(name).expect("the occupancy layout has an α head").range();
-        for p in &mut field.params_mut()[range] {
-            *p *= 0.1;
-        }
-    }
+    super::scale_tensors(
+        field.params_mut(),
+        &layout,
+        &["out_alpha.weight", "out_alpha.bias"],
+        0.1,
+    );
     field
 }
 
