@@ -124,11 +124,7 @@ fn every_simd_backend_matches_candle_autograd() {
 #[test]
 fn results_are_bit_identical_for_any_thread_count() {
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("pool");
-        pool.install(|| {
+        super::on_threads(threads, || {
             let (mut batch, samples) = setup(5, &[3, 2, 4], 32, 200, 10, Backend::detect());
             let losses: Vec<f32> = (0..3)
                 .flat_map(|_| batch.train_step(&samples).expect("shapes agree"))

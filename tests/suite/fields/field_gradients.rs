@@ -156,11 +156,7 @@ fn adding_a_field_keeps_the_others_optimiser_state() {
 #[test]
 fn results_are_bit_identical_for_any_thread_count() {
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("pool");
-        pool.install(|| {
+        super::on_threads(threads, || {
             let (mut batch, samples) = setup(8, &[32, 32, 128], 30, 10, Backend::detect());
             for _ in 0..3 {
                 batch.train_step(&samples).expect("shapes agree");

@@ -19,3 +19,12 @@ fn scale_tensors(params: &mut [f32], layout: &catmap::field::ParamLayout, names:
         }
     }
 }
+
+/// `work`'s result on a rayon pool of `threads` threads (the bit-identity tests compare them).
+fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool")
+        .install(work)
+}
