@@ -177,7 +177,9 @@ mod tests {
 
     #[test]
     fn sincos_matches_f64_on_every_backend() {
-        for backend in Backend::all_available() {
+        let backends = Backend::all_available();
+        println!("SIMD paths run: {}", Backend::describe_all(&backends));
+        for backend in backends {
             struct Check;
             impl WithSimd for Check {
                 type Output = f64;

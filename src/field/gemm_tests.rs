@@ -87,7 +87,9 @@ fn check_backend(backend: Backend) {
 
 #[test]
 fn every_backend_matches_a_naive_product() {
-    for backend in Backend::all_available() {
+    let backends = Backend::all_available();
+    println!("SIMD paths run: {}", Backend::describe_all(&backends));
+    for backend in backends {
         check_backend(backend);
     }
 }
@@ -95,7 +97,9 @@ fn every_backend_matches_a_naive_product() {
 #[test]
 fn column_sums_add_every_row() {
     let data: Vec<f32> = (0..5 * 20).map(value).collect();
-    for backend in Backend::all_available() {
+    let backends = Backend::all_available();
+    println!("SIMD paths run: {}", Backend::describe_all(&backends));
+    for backend in backends {
         let mut out = vec![1.0; 16];
         add_column_sums(backend, &data, 5, 20, &mut out);
         for (c, o) in out.iter().enumerate() {

@@ -116,7 +116,9 @@ fn many_rays_split_into_several_tasks_match_candle_autograd() {
 
 #[test]
 fn every_simd_backend_matches_candle_autograd() {
-    for backend in Backend::all_available() {
+    let backends = Backend::all_available();
+    println!("SIMD paths run: {}", Backend::describe_all(&backends));
+    for backend in backends {
         check_against_candle(4, &[2, 3], 16, 13, 10, backend);
     }
 }

@@ -84,7 +84,9 @@ fn mixed_widths_and_odd_sizes_match_candle_autograd() {
 
 #[test]
 fn every_simd_backend_matches_candle_autograd() {
-    for backend in Backend::all_available() {
+    let backends = Backend::all_available();
+    println!("SIMD paths run: {}", Backend::describe_all(&backends));
+    for backend in backends {
         check_against_candle(4, &[32, 128], 13, 10, backend);
     }
 }
