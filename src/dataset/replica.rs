@@ -107,7 +107,8 @@ pub fn resolve_replica_intrinsics(dir: &Path, camera: Option<CameraIntrinsics>) 
         return Ok(camera);
     }
     let json = dir.join("intrinsics.json");
-    if json.is_file() {
+    if json.exists() {
+        // A folder or an unreadable file in its place is an error naming it, not a silent default.
         read_intrinsics_json(&json)
     } else {
         Ok(CameraIntrinsics::REPLICA)
@@ -132,7 +133,7 @@ fn read_trajectory(path: &Path, indices: &[u64]) -> Result<Vec<Isometry3<f32>>> 
         .map(|&index| {
             let line_number = usize::try_from(index).map_or(usize::MAX, |i| i.saturating_add(1));
             let Some(line) = lines.get(line_number - 1).filter(|_| line_number <= pose_count) else {
-                let reason = format!("missing pose of depth_{index}.png: the file has only {pose_count} poses");
+                let reason = format!("missing pose of depth/depth_{index}.png: the file has only {pose_count} poses");
                 return Err(error(line_number, reason));
             };
             let numbers = parse_numbers(line).map_err(|reason| error(line_number, reason))?;

@@ -74,6 +74,8 @@ pub struct ScanNetSequence {
     dir: PathBuf,
     /// Size of the depth images before cropping.
     depth_size: (u32, u32),
+    /// The depth image that size was read from (named when another one differs).
+    first_depth: PathBuf,
     /// Intrinsics of the cropped images.
     intrinsics: CameraIntrinsics,
     frames: Vec<ScanNetFrame>,
@@ -164,6 +166,10 @@ impl ScanNetSequence {
         let mut frames = Vec::with_capacity(depth_files.len());
         for (number, _) in &depth_files {
             let pose_path = dir.join("pose").join(format!("{number}.txt"));
+            if !pose_path.exists() {
+                let reason = format!("no such file: depth/{number}.png has no pose");
+                return Err(CatmapError::layout(pose_path, reason));
+            }
             match read_pose(&pose_path)? {
                 PoseFile::Valid(world_from_camera) => frames.push(ScanNetFrame {
                     number: *number,
@@ -210,13 +216,18 @@ impl ScanNetSequence {
             return Err(CatmapError::Parse {
                 path: matrix_path,
                 line: 0,
-                reason: format!("after cropping the {border}-pixel border: {problem}"),
+                reason: format!(
+                    "after cropping the {border}-pixel border of the first depth image ({}, {}): {problem}",
+                    first_depth.display(),
+                    size_text(depth_size)
+                ),
             });
         }
         tracing::debug!(dir = %dir.display(), frames = frames.len(), ?intrinsics, "opened ScanNet sequence");
         Ok(Self {
             dir,
             depth_size,
+            first_depth,
             intrinsics,
             frames,
             options: options.clone(),
@@ -256,7 +267,8 @@ impl ScanNetSequence {
     /// Depth: must have the size of the sequence's first depth image; cropped.
     fn load_depth(&self, path: &Path) -> Result<Vec<f32>> {
         let depth = read_grey_as::<f32>(path)?;
-        require_size(&depth, self.depth_size, path, "the sequence's first depth image")?;
+        let first = format!("the sequence's first depth image ({})", self.first_depth.display());
+        require_size(&depth, self.depth_size, path, &first)?;
         self.crop(&depth, path)
     }
 

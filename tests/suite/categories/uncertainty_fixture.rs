@@ -1,7 +1,9 @@
 //! Ray-based uncertainty on a fixture field (the category-registration issue's acceptance): a
 //! per-object field trained on a ball seen only from the −x side. Rays through the trained
 //! surface are certain hits (high u, high g), rays through empty space certain misses (low u,
-//! high g). Rays into the never-seen +x half are printed (the issue expects medium u, low g).
+//! high g). Rays into the never-seen +x half should be uncertain (medium u, low g) but read as
+//! certain hits: a known gap, asserted as it is so that its fix (the issue "Beyond the paper on
+//! what no camera saw", point 5) shows here and turns the assertion round.
 
 use catmap::categories::uncertainty::{UncertaintyConfig, ray_uncertainty, reliability};
 use catmap::field::{AdamWConfig, FieldBatch, OBJECT_HIDDEN, OccupancyField, RaySamples};
@@ -72,7 +74,7 @@ fn ray_u_g(field: &OccupancyField, origin: Point3<f32>, dir: Vector3<f32>, cfg: 
 }
 
 #[test]
-fn trained_surface_is_certain_empty_space_is_certain_and_the_unseen_half_is_not() {
+fn trained_surface_and_empty_space_are_certain_and_the_unseen_half_reads_certain_too_a_known_gap() {
     let mut rng = seeded_rng(3, RngStream::Mapper);
     let mut batch = FieldBatch::new(AdamWConfig::default());
     batch.push(OccupancyField::new(OBJECT_HIDDEN, 1.0, &mut rng));
@@ -112,8 +114,11 @@ fn trained_surface_is_certain_empty_space_is_certain_and_the_unseen_half_is_not(
     println!("{report}");
     assert!(u_seen > cfg.high.1 && g_seen > 0.5, "{report}");
     assert!(u_empty < cfg.low.0 && g_empty > 0.5, "{report}");
-    // Not asserted — a measured gap: the issue expects the never-seen half to give medium u and
-    // low g, but the field extrapolates the ball's interior into a confident solid (measured
-    // u ≈ 0.95, g ≈ 1.0), so rays into the unseen half look like certain hits.
-    let _ = (u_unseen, g_unseen);
+    // The known gap: the never-seen half should give medium u and low g, but the field
+    // extrapolates the ball's interior into a confident solid, so rays into the unseen half look
+    // like certain hits, as certain as the seen surface.
+    assert!(
+        u_unseen > cfg.high.1 && g_unseen > 0.5,
+        "the known gap (the unseen half reads certain) has changed — if it is fixed, assert medium u and low g here: {report}"
+    );
 }

@@ -156,9 +156,19 @@ fn meshes_are_written_per_object_near_the_ground_truth_and_repeat_bit_for_bit() 
     assert!(pred.join("scene.ply").is_file() && pred.join("background.ply").is_file());
     let report = evaluate_dirs(&pred, &gt, Crop::Paper, 0).expect("evaluate");
     assert_eq!(report.mean.missing, 0, "every ground-truth object has a mesh");
-    // 150 steps is a short training run; the bound only says the meshes sit on the objects.
-    let completion = report.mean.completion_cm.expect("completion");
-    assert!(completion < 15.0, "mean completion {completion} cm");
+    // 150 steps of the paper's protocol is a short run: it measures accuracy 5.05 cm,
+    // completion 4.60 cm and 76.8 % of the surface within 5 cm (converged runs reach 1.4–3 cm).
+    // The bounds leave ~20 % of that, so a regression in training or meshing fails here.
+    let mean = &report.mean;
+    let (accuracy, completion) = (
+        mean.accuracy_cm.expect("accuracy"),
+        mean.completion_cm.expect("completion"),
+    );
+    println!("mean over objects: {mean:?}");
+    assert!(
+        accuracy < 6.0 && completion < 5.5 && mean.completion_ratio_5cm_pct > 70.0,
+        "the meshes are near the ground truth: {mean:?}"
+    );
 
     let again = final_meshes(150);
     assert_eq!(meshes, again, "the same seed gives bit-identical meshes");

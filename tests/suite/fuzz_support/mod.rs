@@ -27,6 +27,12 @@ use rand_chacha::ChaCha8Rng;
 pub const DEFAULT_INPUTS: u64 = 2000;
 /// A run stops early after this many failures.
 const MAX_FAILURES: usize = 5;
+/// In a run of at least [`VERDICT_CHECK_FROM`] inputs, each verdict must be given to at least this
+/// share of them: a generator whose inputs were all rejected (or all accepted) would leave the
+/// checks on accepted inputs (or on errors) vacuous.
+const MIN_VERDICT_SHARE: f64 = 0.01;
+/// Runs shorter than this (a debugging `CATMAP_FUZZ_INPUTS`) skip the verdict-share check.
+const VERDICT_CHECK_FROM: u64 = 100;
 
 /// What one execution did with its input.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -128,13 +134,14 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
 
 /// Runs target `name` within its [`budget`]: `generate` draws an input, `execute` runs the reader on it.
 /// `save` renders an input as bytes (plus a description) for the failure file. Panics when any
-/// input panicked or broke a property, listing them all.
+/// input panicked or broke a property, listing them all, and when either verdict was given to
+/// less than [`MIN_VERDICT_SHARE`] of the inputs.
 pub fn fuzz<I>(
     name: &str,
     mut generate: impl FnMut(&mut ChaCha8Rng) -> I,
     mut execute: impl FnMut(&I) -> Execution,
     save: impl Fn(&I) -> (String, Vec<u8>),
-) -> Report {
+) {
     let budget = budget();
     let trace = std::env::var_os("CATMAP_FUZZ_TRACE").is_some();
     let mut rng = target_rng(name);
@@ -188,15 +195,39 @@ pub fn fuzz<I>(
         report.failures.len(),
         report.failures.join("\n")
     );
-    report
+    report.assert_both_verdicts(name);
+}
+
+impl Report {
+    /// Panics when either verdict was given to less than [`MIN_VERDICT_SHARE`] of a run of at
+    /// least [`VERDICT_CHECK_FROM`] inputs.
+    fn assert_both_verdicts(&self, name: &str) {
+        if self.executions < VERDICT_CHECK_FROM {
+            return;
+        }
+        let least = (MIN_VERDICT_SHARE * self.executions as f64).ceil() as u64;
+        assert!(
+            self.accepted >= least && self.rejected >= least,
+            "fuzz target {name}: {} accepted and {} rejected of {} inputs; each needs at least {least}, or the checks of the other are vacuous",
+            self.accepted,
+            self.rejected,
+            self.executions
+        );
+    }
 }
 
 /// `Ok(Rejected)` when `error` mentions `needle` (a file name or folder), else the broken property.
 pub fn rejected_naming(error: &impl std::fmt::Display, needle: &str) -> Execution {
+    rejected_naming_one_of(error, &[needle])
+}
+
+/// `Ok(Rejected)` when `error` mentions one of `needles` (the files an edit touched), else the
+/// broken property.
+pub fn rejected_naming_one_of(error: &impl std::fmt::Display, needles: &[&str]) -> Execution {
     let text = error.to_string();
-    if text.contains(needle) {
+    if needles.iter().any(|needle| text.contains(needle)) {
         Ok(Verdict::Rejected)
     } else {
-        Err(format!("error does not name {needle:?}: {text}"))
+        Err(format!("error does not name one of {needles:?}: {text}"))
     }
 }

@@ -1,7 +1,10 @@
 //! Online category mode: while the small scene streams, category fields appear once the chairs
 //! are registered and train beside the per-object fields on every frame; members carry their
-//! slot (field, code, NOCS frame); a membership change keeps every field that survives.
+//! slot (field, code, NOCS frame); a membership change keeps every field that survives (its
+//! number and its training).
 
+use catmap::categories::field_plan::plan_category_fields;
+use catmap::categories::field_set::CategoryFieldSet;
 use catmap::config::FieldConfig;
 use catmap::dataset::FrameSource;
 use catmap::synth::{Preset, SyntheticScene};
@@ -14,7 +17,8 @@ use catmap_systems::resources::CategoryFields;
 
 #[test]
 fn category_fields_start_and_train_while_the_scene_streams() {
-    let scene = SyntheticScene::generate(4, Preset::Small).expect("small scene");
+    // Scene seed 3: the chairs' membership changes three times with a surviving field.
+    let scene = SyntheticScene::generate(3, Preset::Small).expect("small scene");
     let mut config = MapperConfig {
         seed: 3,
         fields: FieldConfig {
@@ -29,7 +33,9 @@ fn category_fields_start_and_train_while_the_scene_streams() {
     let mut mapper = Mapper::new(config).expect("valid config");
     let mut first_field_at = None;
     let mut memberships = Vec::new();
+    let mut continued_fields = 0;
     for position in 0..scene.len() {
+        let before = FieldsSeen::of(mapper.world().resource::<CategoryFields>());
         mapper
             .push(scene.read_frame(position).expect("frame renders"))
             .expect("valid frame");
@@ -41,7 +47,13 @@ fn category_fields_start_and_train_while_the_scene_streams() {
         if memberships.last() != Some(&fields.members) {
             memberships.push(fields.members.clone());
         }
+        continued_fields += before.assert_survivors_kept(fields, position);
     }
+    println!("{continued_fields} fields continued across a membership change");
+    assert!(
+        continued_fields > 0,
+        "the membership changed with a surviving field while streaming: {memberships:?}"
+    );
     let (position, _) = first_field_at.expect("a category field appears while streaming");
     assert!(position + 1 < scene.len(), "before the stream ends (frame {position})");
     let fields = mapper.world().resource::<CategoryFields>();
@@ -88,4 +100,68 @@ fn category_fields_start_and_train_while_the_scene_streams() {
     for (id, from_category, member) in previews {
         assert_eq!(from_category, member, "object {id}'s preview source");
     }
+}
+
+/// The category fields before a step: members, creation numbers, optimiser steps.
+struct FieldsSeen {
+    members: Vec<Vec<ObjectId>>,
+    ids: Vec<u32>,
+    steps: Vec<u64>,
+    created: u32,
+}
+
+impl FieldsSeen {
+    fn of(set: &CategoryFieldSet) -> Self {
+        Self {
+            members: set.members.clone(),
+            ids: set.ids.clone(),
+            steps: optimiser_steps(set),
+            created: set.fields_created,
+        }
+    }
+
+    /// After a step that changed the membership, every field that continues one of before (by
+    /// [`plan_category_fields`]) kept its number and its training (the optimiser's step count
+    /// did not restart); the others are new. Returns how many fields continued.
+    fn assert_survivors_kept(&self, after: &CategoryFieldSet, position: usize) -> usize {
+        if after.members == self.members || self.members.is_empty() {
+            return 0;
+        }
+        let steps = optimiser_steps(after);
+        let mut continued = 0;
+        for (k, planned) in plan_category_fields(&self.members, &after.members).iter().enumerate() {
+            match planned.continues {
+                Some(i) => {
+                    continued += 1;
+                    assert_eq!(
+                        after.ids[k], self.ids[i],
+                        "frame {position}: field {k} continues field {i} under its number"
+                    );
+                    assert!(
+                        steps[k] >= self.steps[i],
+                        "frame {position}: field {k} kept the training of field {i} ({} steps before, {} after)",
+                        self.steps[i],
+                        steps[k]
+                    );
+                }
+                None => assert!(
+                    after.ids[k] >= self.created,
+                    "frame {position}: field {k} is new and has a new number"
+                ),
+            }
+        }
+        continued
+    }
+}
+
+fn optimiser_steps(set: &CategoryFieldSet) -> Vec<u64> {
+    (0..set.members.len())
+        .map(|k| {
+            set.batch
+                .field(k)
+                .expect("one field per member list")
+                .optimiser_state()
+                .step
+        })
+        .collect()
 }
