@@ -10,7 +10,7 @@ mod fields;
 mod files;
 mod tensor_store;
 
-pub use config::CheckpointConfig;
+pub use config::{CheckpointConfig, RunCount};
 pub use fields::{
     CategoryFieldHeader, OccupancyFieldHeader, load_category_field, load_occupancy_field, store_category_field,
     store_occupancy_field,

@@ -155,6 +155,9 @@ impl MapperConfig {
         if m.object.max_samples_per_side < 2 || !(m.object.box_fill > 0.0 && m.object.box_fill <= 1.0) {
             return bad("meshes.object: max_samples_per_side must be >= 2 and box_fill in (0, 1]");
         }
+        if !(self.checkpoint.every_seconds >= 0.0 && self.checkpoint.every_seconds.is_finite()) {
+            return bad("checkpoint.every_seconds must be a finite number of seconds, 0 or more (0: never)");
+        }
         if self.rerun.image_downscale == 0 || self.rerun.image_every == 0 {
             return bad("rerun.image_downscale and rerun.image_every must be at least 1");
         }

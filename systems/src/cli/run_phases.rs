@@ -1,5 +1,6 @@
 //! The phases of `catmap run` — stream, training after the stream, category fields, outputs —
-//! with a checkpoint every few frames or steps and on Ctrl-C, and `--resume` from the latest one.
+//! with a checkpoint every few frames, steps or seconds and on Ctrl-C, and `--resume` from the
+//! latest one.
 
 use std::ops::ControlFlow;
 use std::path::Path;
@@ -9,6 +10,7 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use catmap::CatmapError;
+use catmap::checkpoint::RunCount;
 use catmap::config::{CheckpointConfig, FirstPhase};
 use catmap::dataset::FrameSource;
 use catmap::dataset::stream::{FrameStream, stream_positions};
@@ -151,6 +153,8 @@ struct Checkpoints {
     plan: RunPlan,
     cfg: CheckpointConfig,
     started: Instant,
+    /// When the last checkpoint was written (or the run or its resume started).
+    last: Instant,
     interrupted: Arc<AtomicBool>,
 }
 
@@ -171,40 +175,26 @@ impl Checkpoints {
             plan: plan.clone(),
             cfg,
             started,
+            last: Instant::now(),
             interrupted,
         }
     }
 
-    /// Break when a checkpoint is due after `progress` (every `every_frames` frames or
-    /// `every_steps` steps) or Ctrl-C was pressed.
+    /// Break when a checkpoint is due after `progress` (`CheckpointConfig::is_due`: by frames,
+    /// steps or the clock) or Ctrl-C was pressed.
     fn break_if(&self, progress: RunProgress) -> ControlFlow<()> {
-        let due = match progress.phase {
-            RunPhase::Stream => progress.done.is_multiple_of(self.every_frames()),
-            RunPhase::AfterStream | RunPhase::Categories => progress.done.is_multiple_of(self.every_steps()),
+        let count = match progress.phase {
+            RunPhase::Stream => RunCount::Frames(progress.done),
+            RunPhase::AfterStream | RunPhase::Categories => RunCount::Steps {
+                done: progress.done,
+                chunk: catmap_systems::mapper::CHUNK_STEPS,
+            },
         };
+        let due = self.cfg.is_due(count, self.last.elapsed().as_secs_f64());
         if due || self.interrupted.load(Ordering::SeqCst) {
             ControlFlow::Break(())
         } else {
             ControlFlow::Continue(())
-        }
-    }
-
-    /// Frames between checkpoints (`u64::MAX` when disabled).
-    fn every_frames(&self) -> u64 {
-        if self.cfg.enabled && self.cfg.every_frames > 0 {
-            self.cfg.every_frames
-        } else {
-            u64::MAX
-        }
-    }
-
-    /// Steps between checkpoints, rounded up to whole chunks (`u64::MAX` when disabled).
-    fn every_steps(&self) -> u64 {
-        let chunk = catmap_systems::mapper::CHUNK_STEPS;
-        if self.cfg.enabled && self.cfg.every_steps > 0 {
-            self.cfg.every_steps.div_ceil(chunk) * chunk
-        } else {
-            u64::MAX
         }
     }
 
@@ -227,6 +217,7 @@ impl Checkpoints {
                 seconds = started.elapsed().as_secs_f64(),
                 "checkpoint written"
             );
+            self.last = Instant::now();
         }
         if interrupted {
             tracing::warn!(

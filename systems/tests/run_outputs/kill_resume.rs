@@ -1,8 +1,12 @@
-//! `catmap run` killed with SIGKILL at random moments (checkpoints every 2 frames and every 50
-//! steps, so some kills land inside a checkpoint write) and continued each time with
-//! `catmap run --resume`: after every kill the checkpoint on disk is intact and no output file
-//! is half-written; the final meshes, categories.json and metrics.json equal those of a run that
-//! was never interrupted, byte for byte.
+//! `catmap run` killed with SIGKILL and continued with `catmap run --resume`:
+//! - at random moments and inside checkpoint writes (checkpoints every 2 frames and every 50
+//!   steps; at least two kills leave a write unfinished): after every kill the checkpoint on disk
+//!   is intact and no output file is half-written;
+//! - a default run killed a third of the way through, with checkpoints by the clock alone: the
+//!   kill finds a checkpoint to resume from.
+//!
+//! Either way the final meshes, categories.json and metrics.json equal those of a run that was
+//! never interrupted, byte for byte.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -92,6 +96,21 @@ fn assert_outputs_whole(out: &Path) {
     }
 }
 
+/// Whether the checkpoint folder holds an unfinished write: a `.tmp` file, or a generation file
+/// its manifest does not name (a kill between the parts of a write).
+fn unfinished_write(checkpoint: &Path) -> bool {
+    let Ok(entries) = std::fs::read_dir(checkpoint) else {
+        return false;
+    };
+    let named: Vec<String> = catmap::checkpoint::read_manifest(checkpoint)
+        .map(|m| vec![m.state.name, m.tensors.name])
+        .unwrap_or_default();
+    entries.filter_map(Result::ok).any(|e| {
+        let name = e.file_name().to_string_lossy().into_owned();
+        name.ends_with(".tmp") || (name != MANIFEST && !named.contains(&name))
+    })
+}
+
 /// Whether a checkpoint file is being written (a `.tmp` file exists in the folder).
 fn writing(checkpoint: &Path) -> bool {
     std::fs::read_dir(checkpoint).is_ok_and(|entries| {
@@ -110,17 +129,49 @@ fn files_under(dir: &Path) -> Vec<PathBuf> {
     files
 }
 
-#[test]
-fn a_run_killed_at_random_moments_and_resumed_ends_like_an_uninterrupted_one() {
-    let work = tempfile::tempdir().expect("temp dir");
-    let work = work.path();
-    std::fs::write(work.join("config.toml"), CONFIG).expect("config written");
+/// The outputs a resumed run must reproduce byte for byte: the meshes, categories.json and
+/// metrics.json.
+fn assert_same_outputs(reference: &Path, resumed: &Path) {
+    let meshes: Vec<_> = files_under(&reference.join("meshes"));
+    assert!(meshes.len() >= 5, "meshes written: {meshes:?}");
+    let names = |files: &[PathBuf]| {
+        files
+            .iter()
+            .map(|p| p.file_name().map(|n| n.to_owned()))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(names(&files_under(&resumed.join("meshes"))), names(&meshes));
+    for file in meshes
+        .iter()
+        .map(|p| PathBuf::from("meshes").join(p.file_name().expect("name")))
+        .chain(["categories.json".into(), "metrics.json".into()])
+    {
+        let a = std::fs::read(reference.join(&file)).expect("reference output");
+        let b = std::fs::read(resumed.join(&file)).expect("resumed output");
+        assert!(
+            a == b,
+            "{} differs between the uninterrupted and the resumed run",
+            file.display()
+        );
+    }
+}
+
+/// The small scene of seed 4 in `work/scene`.
+fn synthesise(work: &Path) {
     let status = catmap()
         .args(["synth", "--preset", "small", "--seed", "4", "--out"])
         .arg(work.join("scene"))
         .status()
         .expect("catmap runs");
     assert!(status.success(), "synth");
+}
+
+#[test]
+fn a_run_killed_at_random_moments_and_inside_checkpoint_writes_resumes_like_an_uninterrupted_one() {
+    let work = tempfile::tempdir().expect("temp dir");
+    let work = work.path();
+    std::fs::write(work.join("config.toml"), CONFIG).expect("config written");
+    synthesise(work);
 
     let reference = work.join("reference");
     let started = Instant::now();
@@ -154,7 +205,9 @@ fn a_run_killed_at_random_moments_and_resumed_ends_like_an_uninterrupted_one() {
             if let Some(status) = child.try_wait().expect("waits") {
                 break Some(status);
             }
-            let due = kills < 8
+            // At least 8 kills, and more until two of them left a write unfinished (at most 24).
+            let wanted = kills < 8 || (torn_writes < 2 && kills < 24);
+            let due = wanted
                 && if at_write {
                     writing(&checkpoint) || started.elapsed() >= 2 * limit
                 } else {
@@ -176,12 +229,7 @@ fn a_run_killed_at_random_moments_and_resumed_ends_like_an_uninterrupted_one() {
             }
             None => {
                 kills += 1;
-                let checkpoint = killed.join("checkpoint");
-                if checkpoint.exists()
-                    && files_under(&checkpoint)
-                        .iter()
-                        .any(|p| p.extension() == Some("tmp".as_ref()))
-                {
+                if unfinished_write(&killed.join("checkpoint")) {
                     torn_writes += 1;
                 }
                 assert_outputs_whole(&killed);
@@ -189,32 +237,74 @@ fn a_run_killed_at_random_moments_and_resumed_ends_like_an_uninterrupted_one() {
         }
     }
     println!("{kills} kills ({torn_writes} inside a checkpoint write), {resumes} resumes; full run {full:?}");
-    assert!(kills >= 2 && resumes >= 1, "the run was interrupted and resumed");
+    assert!(kills >= 8 && resumes >= 1, "the run was interrupted and resumed");
+    assert!(
+        torn_writes >= 2,
+        "{torn_writes} of {kills} kills left a checkpoint write unfinished; the resume from one is what this test is for"
+    );
     assert!(
         !killed.join("checkpoint").exists(),
         "the checkpoint is removed after success"
     );
+    assert_same_outputs(&reference, &killed);
+}
 
-    let meshes: Vec<_> = files_under(&reference.join("meshes"));
-    assert!(meshes.len() >= 5, "meshes written: {meshes:?}");
-    let names = |files: &[PathBuf]| {
-        files
-            .iter()
-            .map(|p| p.file_name().map(|n| n.to_owned()))
-            .collect::<Vec<_>>()
-    };
-    assert_eq!(names(&files_under(&killed.join("meshes"))), names(&meshes));
-    for file in meshes
-        .iter()
-        .map(|p| PathBuf::from("meshes").join(p.file_name().expect("name")))
-        .chain(["categories.json".into(), "metrics.json".into()])
-    {
-        let a = std::fs::read(reference.join(&file)).expect("reference output");
-        let b = std::fs::read(killed.join(&file)).expect("resumed output");
-        assert!(
-            a == b,
-            "{} differs between the uninterrupted and the resumed run",
-            file.display()
-        );
-    }
+#[test]
+fn a_default_run_killed_a_third_of_the_way_resumes_from_its_clock_checkpoint_to_the_same_outputs() {
+    let work = tempfile::tempdir().expect("temp dir");
+    let work = work.path();
+    synthesise(work);
+    // The default configuration: the run and its reference differ only in the cadence of
+    // checkpoints, by the clock alone and scaled to this short run (the default is every 20 s).
+    let reference = work.join("reference");
+    let started = Instant::now();
+    let status = catmap()
+        .args(["run", "--dataset"])
+        .arg(work.join("scene"))
+        .arg("--out")
+        .arg(&reference)
+        .status()
+        .expect("catmap runs");
+    assert!(status.success(), "uninterrupted run");
+    let full = started.elapsed();
+    let every_seconds = (full.as_secs_f64() / 8.0).max(0.2);
+    std::fs::write(
+        work.join("config.toml"),
+        format!("[checkpoint]\nevery_frames = 0\nevery_steps = 0\nevery_seconds = {every_seconds}\n"),
+    )
+    .expect("config written");
+
+    let killed = work.join("killed");
+    let mut child = catmap()
+        .args(["run", "--dataset"])
+        .arg(work.join("scene"))
+        .arg("--config")
+        .arg(work.join("config.toml"))
+        .arg("--out")
+        .arg(&killed)
+        .spawn()
+        .expect("catmap starts");
+    std::thread::sleep(full / 3);
+    assert!(
+        child.try_wait().expect("waits").is_none(),
+        "the run is still going a third of the way through"
+    );
+    child.kill().expect("SIGKILL");
+    child.wait().expect("reaped");
+    assert_outputs_whole(&killed);
+    let checkpoint = killed.join("checkpoint");
+    let manifest = verify_checkpoint(&checkpoint)
+        .unwrap_or_else(|e| panic!("a checkpoint every {every_seconds:.2} s left one to resume from: {e}"));
+    println!(
+        "full run {full:?}; killed at a third; resumed from checkpoint {} ({})",
+        manifest.generation, manifest.label
+    );
+    let status = catmap()
+        .arg("run")
+        .arg("--resume")
+        .arg(&killed)
+        .status()
+        .expect("catmap runs");
+    assert!(status.success(), "the resumed run completes");
+    assert_same_outputs(&reference, &killed);
 }
