@@ -196,9 +196,11 @@ fn a_run_killed_at_random_moments_and_inside_checkpoint_writes_resumes_like_an_u
             run_args(&mut command, work, &killed);
         }
         let mut child = command.spawn().expect("catmap starts");
-        // Odd kills land as soon as a checkpoint file is being written; even ones at a random time.
-        let at_write = kills % 2 == 1;
-        let limit = Duration::from_secs_f64(rng.random_range(0.1..0.4) * full.as_secs_f64());
+        // Odd kills land as soon as a checkpoint file is being written (from the sixth on, every
+        // kill until two writes were torn); even ones at a random time, short enough (at most a
+        // fifth of the run each) that the run cannot finish before the eighth kill.
+        let at_write = kills % 2 == 1 || (kills >= 6 && torn_writes < 2);
+        let limit = Duration::from_secs_f64(rng.random_range(0.05..0.2) * full.as_secs_f64());
         let checkpoint = killed.join("checkpoint");
         let started = Instant::now();
         let status = loop {
@@ -209,7 +211,7 @@ fn a_run_killed_at_random_moments_and_inside_checkpoint_writes_resumes_like_an_u
             let wanted = kills < 8 || (torn_writes < 2 && kills < 24);
             let due = wanted
                 && if at_write {
-                    writing(&checkpoint) || started.elapsed() >= 2 * limit
+                    writing(&checkpoint) || started.elapsed() >= full
                 } else {
                     started.elapsed() >= limit
                 };
