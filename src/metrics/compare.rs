@@ -95,6 +95,7 @@ mod tests {
                     completion_ratio_5cm_pct: 90.0,
                     completion_ratio_1cm_pct: 30.0,
                     accuracy_samples: 100,
+                    accuracy_far_5cm_pct: Some(1.0),
                 },
             })
             .collect();

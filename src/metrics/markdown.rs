@@ -21,18 +21,20 @@ pub fn render_markdown(report: &EvaluationReport) -> String {
     let seen = report.objects.iter().any(|o| o.observed_surface_fraction.is_some());
     let (seen_header, seen_align) = if seen { (" seen [%] |", "---:|") } else { ("", "") };
     out.push_str(&format!(
-        "## Objects\n\n| object | class |{seen_header} {SCORE_HEADER} |\n|---:|---|{seen_align}{SCORE_ALIGN}|\n"
+        "## Objects\n\n| object | class |{seen_header} {SCORE_HEADER} | far >5cm [%] |\n|---:|---|{seen_align}{SCORE_ALIGN}|---:|\n"
     ));
     for o in &report.objects {
         let v = &o.scores;
         let row = match v.status {
-            PredictionStatus::Missing => "missing | missing | 0.0 | 0.0".to_owned(),
-            PredictionStatus::Reconstructed => scores(
-                v.accuracy_cm,
-                v.completion_cm,
-                v.completion_ratio_5cm_pct,
-                v.completion_ratio_1cm_pct,
-            ),
+            PredictionStatus::Missing => "missing | missing | 0.0 | 0.0 | –".to_owned(),
+            PredictionStatus::Reconstructed => {
+                scores(
+                    v.accuracy_cm,
+                    v.completion_cm,
+                    v.completion_ratio_5cm_pct,
+                    v.completion_ratio_1cm_pct,
+                ) + &format!(" | {}", share(v.accuracy_far_5cm_pct))
+            }
         };
         let seen_cell = match (seen, o.observed_surface_fraction) {
             (false, _) => String::new(),
@@ -72,6 +74,10 @@ fn scores(accuracy_cm: Option<f32>, completion_cm: Option<f32>, ratio_pct: f32, 
     )
 }
 
+fn share(pct: Option<f32>) -> String {
+    pct.map_or_else(|| "–".to_owned(), |p| format!("{p:.1}"))
+}
+
 fn distance(cm: Option<f32>) -> String {
     cm.map_or_else(|| "–".to_owned(), |d| format!("{d:.2}"))
 }
@@ -91,6 +97,7 @@ mod tests {
             completion_ratio_5cm_pct: 96.0,
             completion_ratio_1cm_pct: 40.0,
             accuracy_samples: 10,
+            accuracy_far_5cm_pct: Some(12.5),
         };
         let objects = vec![
             ObjectMetrics {
@@ -110,11 +117,11 @@ mod tests {
         ];
         let text = render_markdown(&EvaluationReport::new(EvalSettings::default(), objects));
         assert!(
-            text.contains("| 4 | chair | 1.23 | 2.50 | 96.0 | 40.0 |"),
+            text.contains("| 4 | chair | 1.23 | 2.50 | 96.0 | 40.0 | 12.5 |"),
             "object row:\n{text}"
         );
         assert!(
-            text.contains("| 7 | chair | missing | missing | 0.0 | 0.0 |"),
+            text.contains("| 7 | chair | missing | missing | 0.0 | 0.0 | – |"),
             "missing row:\n{text}"
         );
         assert!(

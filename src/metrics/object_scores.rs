@@ -56,6 +56,10 @@ pub struct ObjectScores {
     pub completion_ratio_1cm_pct: f32,
     /// Predicted samples inside the crop (those accuracy is averaged over).
     pub accuracy_samples: usize,
+    /// Share of those predicted samples farther than 5 cm from the ground truth, % (surface
+    /// that is not there: a table left solid under its top); `None` when accuracy is.
+    #[serde(default)]
+    pub accuracy_far_5cm_pct: Option<f32>,
 }
 
 impl ObjectScores {
@@ -68,6 +72,7 @@ impl ObjectScores {
             completion_ratio_5cm_pct: 0.0,
             completion_ratio_1cm_pct: 0.0,
             accuracy_samples: 0,
+            accuracy_far_5cm_pct: None,
         }
     }
 }
@@ -99,7 +104,11 @@ pub fn score_object<R: Rng + ?Sized>(
         return Ok(ObjectScores::missing());
     }
     let cropped = crop.apply(&gt_box, pred_samples, gt_samples);
-    let accuracy_cm = mean_distance_cm(&cropped.ground_truth, &cropped.prediction_for_accuracy)?;
+    let accuracy = accuracy_distances(&cropped.ground_truth, &cropped.prediction_for_accuracy)?;
+    let accuracy_cm = accuracy.as_deref().map(|d| 100.0 * mean(d));
+    let accuracy_far_5cm_pct = accuracy
+        .as_deref()
+        .map(|d| 100.0 - percent_within(d, COMPLETION_THRESHOLD_M));
     let mut scores = ObjectScores {
         status: PredictionStatus::Reconstructed,
         accuracy_cm,
@@ -107,6 +116,7 @@ pub fn score_object<R: Rng + ?Sized>(
         completion_ratio_5cm_pct: 0.0,
         completion_ratio_1cm_pct: 0.0,
         accuracy_samples: cropped.prediction_for_accuracy.len(),
+        accuracy_far_5cm_pct,
     };
     if cropped.prediction_for_completion.is_empty() || cropped.ground_truth.is_empty() {
         return Ok(scores);
@@ -118,12 +128,12 @@ pub fn score_object<R: Rng + ?Sized>(
     Ok(scores)
 }
 
-/// Mean distance from `queries` to `reference`, cm; `None` when either set is empty.
-fn mean_distance_cm(reference: &[Point3<f32>], queries: &[Point3<f32>]) -> Result<Option<f32>> {
+/// The distance from each of `queries` to `reference`, metres; `None` when either set is empty.
+fn accuracy_distances(reference: &[Point3<f32>], queries: &[Point3<f32>]) -> Result<Option<Vec<f32>>> {
     if reference.is_empty() || queries.is_empty() {
         return Ok(None);
     }
-    Ok(Some(100.0 * PointIndex::new(reference)?.mean_distance(queries)))
+    Ok(Some(PointIndex::new(reference)?.nearest_distances(queries)))
 }
 
 /// Mean of `values` in f64 (0 for none).

@@ -69,6 +69,26 @@ fn a_surface_offset_by_three_centimetres_scores_three_centimetres() {
     assert!((completion(&s) - 3.0).abs() < 0.15, "completion ≈ 3 cm: {s:?}");
     assert_eq!(s.completion_ratio_5cm_pct, 100.0, "3 cm < 5 cm");
     assert_eq!(s.completion_ratio_1cm_pct, 0.0, "3 cm > 1 cm");
+    assert_eq!(s.accuracy_far_5cm_pct, Some(0.0), "no predicted sample is 5 cm away");
+}
+
+#[test]
+fn surface_inside_the_object_counts_as_farther_than_five_centimetres() {
+    // The prediction is the ground-truth sphere plus a sphere of half its radius at its centre
+    // (surface that is not there, like a table left solid under its top): a quarter of the
+    // area, so a fifth of the samples, all 10 cm from the ground truth and inside its box.
+    let gt = sphere(Point3::origin(), 0.2);
+    let mut doubled = gt.clone();
+    let inner = sphere(Point3::origin(), 0.1);
+    let base = doubled.vertices.len() as u32;
+    doubled.vertices.extend(inner.vertices);
+    doubled
+        .triangles
+        .extend(inner.triangles.iter().map(|t| t.map(|i| i + base)));
+    let s = score(&gt, Some(&doubled), Crop::Paper);
+    let far_pct = s.accuracy_far_5cm_pct.expect("a prediction in the crop");
+    assert!((16.0..24.0).contains(&far_pct), "the inner sphere's share: {far_pct} %");
+    assert_eq!(score(&gt, None, Crop::Paper).accuracy_far_5cm_pct, None);
 }
 
 #[test]

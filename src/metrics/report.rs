@@ -146,6 +146,7 @@ mod tests {
             completion_ratio_5cm_pct: ratio,
             completion_ratio_1cm_pct: ratio / 2.0,
             accuracy_samples: 10,
+            accuracy_far_5cm_pct: Some(0.0),
         }
     }
 
