@@ -17,6 +17,7 @@ use crate::error::Result;
 use crate::field::AdamWConfig;
 use crate::field::category::CategoryFieldConfig;
 use crate::field::category::{CATEGORY_HIDDEN, CategoryBatch, CategoryField, CategorySamples};
+use crate::field::free_space::CarveCounts;
 use crate::field::{RaySamplerConfig, RaySamples};
 use crate::ids::{FrameIndex, ObjectId};
 use crate::rng::{RngStream, seeded_rng};
@@ -57,6 +58,9 @@ pub struct CategoryFieldSet {
     pub ids: Vec<u32>,
     /// Latest total loss per field.
     pub losses: Vec<f32>,
+    /// Per field, its members' samples inside their meshed boxes and how many carved free space,
+    /// since its membership last changed.
+    pub carve: Vec<CarveCounts>,
     /// Fields created so far (seeds the next one's generator).
     pub fields_created: u32,
     /// Membership changes applied so far (seeds the fresh codes of the next one).
@@ -71,6 +75,7 @@ impl CategoryFieldSet {
             members: Vec::new(),
             ids: Vec::new(),
             losses: Vec::new(),
+            carve: Vec::new(),
             fields_created: 0,
             remaps: 0,
         }
@@ -93,6 +98,7 @@ impl CategoryFieldSet {
             self.apply_plan(&plan_category_fields(&self.members, &wanted), seed, code_dim);
             self.members = wanted;
             self.losses = vec![f32::NAN; self.members.len()];
+            self.carve = vec![CarveCounts::default(); self.members.len()];
         }
         let nocs: BTreeMap<ObjectId, NocsFrame> = groups
             .iter()
@@ -196,7 +202,7 @@ impl CategoryFieldSet {
 
     /// One step of the fields `plan` names, on the rays their members sampled (any order; they
     /// join their field's samples in member order): moves each member's rays into its NOCS frame (a member whose rays do not fit is skipped,
-    /// with a warning), trains, and records the losses. Returns each planned field's total
+    /// with a warning), trains, and records the losses and carving counts. Returns each planned field's total
     /// loss, in plan order.
     pub fn train_step(&mut self, plan: &BatchPlan, mut sampled: Vec<MemberRays>) -> Result<Vec<f32>> {
         sampled.sort_by_key(|m| (m.place.field, m.place.member));
@@ -206,6 +212,9 @@ impl CategoryFieldSet {
             let Ok(k) = active.binary_search(&place.field) else {
                 continue;
             };
+            if let Some(c) = self.carve.get_mut(place.field) {
+                *c = *c + rays.carve;
+            }
             let nocs_from_world = place.nocs.world_from_nocs.inverse();
             if let Err(e) = samples[k].push_member_rays(rays, place.member, &origin, &nocs_from_world) {
                 tracing::warn!(field = place.field, member = place.member, error = %e, "member rays skipped");

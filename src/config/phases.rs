@@ -1,5 +1,6 @@
 //! [`AfterStream`]: the training phases once the stream has ended, resolved from the config.
 
+use crate::field::RaySamplerConfig;
 use crate::training::SchedulePolicy;
 
 use super::MapperConfig;
@@ -27,6 +28,10 @@ pub struct AfterStream {
 }
 
 impl MapperConfig {
+    /// Box samples per ray of the `fast` schedule's object sampler (`fields.object_rays.box_free_samples`
+    /// unset).
+    pub const CARVING_SAMPLES: usize = 3;
+
     /// The schedule that applies: `schedule.policy`, except that the offline protocol is the
     /// paper's fixed one (its classes are registered on the finished per-object fields).
     pub fn training_policy(&self) -> SchedulePolicy {
@@ -35,6 +40,16 @@ impl MapperConfig {
         } else {
             self.schedule.policy
         }
+    }
+
+    /// The object sampler the run uses: `fields.object_rays`, its unset `box_free_samples` set by
+    /// the schedule — [`Self::CARVING_SAMPLES`] under `fast`, none (vMAP's sampler) under `paper`.
+    pub fn object_rays(&self) -> RaySamplerConfig {
+        let carving = match self.training_policy() {
+            SchedulePolicy::Fast => Self::CARVING_SAMPLES,
+            SchedulePolicy::Paper => 0,
+        };
+        self.fields.object_rays.with_default_carving(carving)
     }
 
     /// The phases after the stream: the paper's fixed protocol (`fields.final_steps` or

@@ -140,6 +140,7 @@ mod tests {
             depth_m,
             rgb: vec![[0.5; 3]; n],
             states,
+            ..RaySamples::default()
         }
     }
 

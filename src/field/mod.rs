@@ -21,6 +21,7 @@
 //! | `fused_batch`, `tasks` | the one fused training step of any batch of fields, its parallel plan |
 //! | `object_field`, `batch`, `samples` | the occupancy field and its batch ([`FieldBatch`]) |
 //! | `ray_sampler` | the depth-guided sampler: keyframes, pixels, depths along rays |
+//! | `free_space` | where free-space samples go: the part of a ray that crosses the object's box |
 //! | `tensors` | parameters as named candle tensors |
 //! | `category` | the CodeNeRF-style category field (shared weights, per-member codes), batched |
 //! | `bench` | benchmark-only (feature `bench`): a plain MLP batch on the same machinery, its candle twin |
@@ -34,6 +35,7 @@ mod config;
 mod dense;
 mod directions;
 mod encoding;
+pub mod free_space;
 mod fused_batch;
 mod gemm;
 mod heads;

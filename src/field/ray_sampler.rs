@@ -5,18 +5,26 @@
 //! the rest drawn uniformly from the older ones — and each gives `pixels_per_keyframe` pixels
 //! drawn uniformly inside the view's stored (enlarged) 2D box. Along the ray
 //! `r(z) = o + z·R·((u − cx)/fx, (v − cy)/fy, 1)` (z is camera depth) with measured depth `d`:
-//! - `free_samples` stratified in `[0, d − band]` (free space before the surface);
+//! - `free_samples` stratified in `[0, d − band]` (free space before the surface), and
+//!   `box_free_samples` stratified on the part of that interval inside the object's box when a
+//!   box is given and the ray crosses it there (else in `[0, d − band]` too; see
+//!   [`super::free_space`]);
 //! - if the pixel is the object's (or unknown): `surface_samples` sorted at
 //!   `d + clip(N(0, (band/3)²), ±band)`;
 //! - if it shows another object or the background: `surface_samples` stratified in
 //!   `[d − band, d + behind]` — the ray stops just behind the occluder;
 //! - invalid depth: all samples stratified in `[0, max valid depth of the step's rays]`.
+//!
+//! The rays are returned with those of this object's (and unknown) pixels first: the others'
+//! colour is never read, and a step skips their colour branch.
 
 use nalgebra::{Point3, Vector3};
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
+use super::free_space::{CarveCounts, carving_interval};
 use super::samples::RaySamples;
+use crate::geometry::oriented_box::OrientedBox;
 use crate::objects::keyframes::KeyframeWindow;
 use crate::objects::object_view::{ObjectView, PixelState};
 
@@ -28,8 +36,12 @@ pub struct RaySamplerConfig {
     pub keyframes_per_step: usize,
     /// Pixels drawn inside each taking-part keyframe's 2D box.
     pub pixels_per_keyframe: usize,
-    /// Stratified samples in free space before the surface.
+    /// Stratified samples in free space before the surface, from the camera (vMAP's).
     pub free_samples: usize,
+    /// Stratified free-space samples on the part of the ray inside the object's box before the
+    /// surface band (the carving sampler, [`super::free_space`]). `None`: the schedule's choice
+    /// ([`RaySamplerConfig::carving_samples`]); 0: vMAP's sampler.
+    pub box_free_samples: Option<usize>,
     /// Samples around (own pixels) or just before and behind (other pixels) the measured depth.
     pub surface_samples: usize,
     /// Half-width of the surface band, metres (the Gaussian's σ is a third of it).
@@ -51,6 +63,7 @@ impl RaySamplerConfig {
         keyframes_per_step: 5,
         pixels_per_keyframe: 24,
         free_samples: 1,
+        box_free_samples: None,
         surface_samples: 9,
         surface_band_m: 0.1,
         behind_occluder_m: 0.05,
@@ -61,6 +74,7 @@ impl RaySamplerConfig {
         keyframes_per_step: 5,
         pixels_per_keyframe: 240,
         free_samples: 5,
+        box_free_samples: Some(0),
         surface_samples: 9,
         surface_band_m: 0.1,
         behind_occluder_m: 0.05,
@@ -68,7 +82,19 @@ impl RaySamplerConfig {
 
     /// Samples per ray.
     pub fn samples_per_ray(&self) -> usize {
-        self.free_samples + self.surface_samples
+        self.free_samples + self.carving_samples() + self.surface_samples
+    }
+
+    /// The box samples this sampler draws (an unset count draws none: the mapper's config sets
+    /// it from the schedule before sampling, `MapperConfig::object_rays`).
+    pub fn carving_samples(&self) -> usize {
+        self.box_free_samples.unwrap_or(0)
+    }
+
+    /// The same sampler with an unset box sample count set to `samples`.
+    pub fn with_default_carving(mut self, samples: usize) -> Self {
+        self.box_free_samples.get_or_insert(samples);
+        self
     }
 
     /// Rays per step when every keyframe slot is filled.
@@ -104,20 +130,24 @@ pub fn choose_step_views(len: usize, recent: &[usize], count: usize, rng: &mut i
 pub fn sample_window_rays(
     window: &KeyframeWindow<ObjectView>,
     field_origin: &Point3<f32>,
+    object_box: Option<&OrientedBox>,
     cfg: &RaySamplerConfig,
     rng: &mut impl Rng,
 ) -> RaySamples {
     let views: Vec<&ObjectView> = window.slots().iter().map(|s| &s.data).collect();
-    sample_training_rays(&views, window.recent_slots(), field_origin, cfg, rng)
+    sample_training_rays(&views, window.recent_slots(), field_origin, object_box, cfg, rng)
 }
 
 /// Draws one step's rays for one field from its keyframe `views` (`recent` = indices of the two
 /// newest in `views`). Sample points are returned relative to `field_origin` (world minus
-/// origin), the frame the field is defined in.
+/// origin), the frame the field is defined in. `object_box` (world) is the region the field is
+/// meshed in: the box samples carve it, and the returned [`RaySamples::carve`] counts the samples
+/// inside it (no box: no box samples, no counts).
 pub fn sample_training_rays(
     views: &[&ObjectView],
     recent: &[usize],
     field_origin: &Point3<f32>,
+    object_box: Option<&OrientedBox>,
     cfg: &RaySamplerConfig,
     rng: &mut impl Rng,
 ) -> RaySamples {
@@ -146,6 +176,7 @@ pub fn sample_training_rays(
         depth_m: Vec::with_capacity(pixels.len()),
         rgb: Vec::with_capacity(pixels.len()),
         states: Vec::with_capacity(pixels.len()),
+        carve: CarveCounts::default(),
     };
     let mut z = Vec::with_capacity(s);
     for (v, du, dv) in pixels {
@@ -159,15 +190,25 @@ pub fn sample_training_rays(
             0.0
         };
         let state = view.states[i];
-        depths_along_ray(depth, state, max_depth, cfg, rng, &mut z);
+        let (camera, dir) = pixel_ray(view, u, row);
+        let free_end = depth - cfg.surface_band_m;
+        let carve = object_box
+            .filter(|_| depth > 0.0 && cfg.carving_samples() > 0)
+            .and_then(|b| carving_interval(b, &camera, &dir, free_end, MIN_CARVE_M));
+        depths_along_ray(depth, state, max_depth, carve, cfg, rng, &mut z);
 
-        let k = &view.intrinsics;
-        let dir_camera = Vector3::new((u as f32 - k.cx) / k.fx, (row as f32 - k.cy) / k.fy, 1.0);
-        let dir = view.world_from_camera.rotation * dir_camera;
-        let origin = Point3::from(view.world_from_camera.translation.vector) - field_origin.coords;
+        let origin = camera - field_origin.coords;
         for &zi in &z {
             let p = origin + dir * zi;
             out.points.push([p.x, p.y, p.z]);
+        }
+        if let Some(b) = object_box {
+            for &zi in &z {
+                if b.contains(&(camera + dir * zi), 0.0) {
+                    out.carve.inside += 1;
+                    out.carve.carving += u64::from(depth > 0.0 && zi < free_end);
+                }
+            }
         }
         out.z.extend_from_slice(&z);
         out.depth_m.push(depth);
@@ -175,14 +216,27 @@ pub fn sample_training_rays(
         out.rgb.push(c.map(|x| f32::from(x) / 255.0));
         out.states.push(state);
     }
-    out
+    out.with_colour_rays_first()
 }
 
-/// The sorted sample depths of one ray (see the module doc), written into `z`.
+/// The camera centre and the ray direction (camera z = 1) of full-frame pixel (`u`, `row`).
+fn pixel_ray(view: &ObjectView, u: u32, row: u32) -> (Point3<f32>, Vector3<f32>) {
+    let k = &view.intrinsics;
+    let dir_camera = Vector3::new((u as f32 - k.cx) / k.fx, (row as f32 - k.cy) / k.fy, 1.0);
+    let dir = view.world_from_camera.rotation * dir_camera;
+    (Point3::from(view.world_from_camera.translation.vector), dir)
+}
+
+/// The shortest stretch of a ray inside the box worth carving, metres of camera depth.
+const MIN_CARVE_M: f32 = 1e-3;
+
+/// The sorted sample depths of one ray (see the module doc), written into `z`; `carve` is the
+/// ray's carving interval in the object's box, if any.
 fn depths_along_ray(
     depth: f32,
     state: PixelState,
     max_depth: f32,
+    carve: Option<(f32, f32)>,
     cfg: &RaySamplerConfig,
     rng: &mut impl Rng,
     z: &mut Vec<f32>,
@@ -194,7 +248,11 @@ fn depths_along_ray(
         stratified(0.0, far, cfg.samples_per_ray(), rng, z);
         return;
     }
-    stratified(0.0, (depth - band).max(0.0), cfg.free_samples, rng, z);
+    let free_end = (depth - band).max(0.0);
+    stratified(0.0, free_end, cfg.free_samples, rng, z);
+    let (near, far) = carve.unwrap_or((0.0, free_end));
+    stratified(near, far, cfg.carving_samples(), rng, z);
+    z.sort_by(f32::total_cmp);
     match state {
         PixelState::ThisObject | PixelState::Unknown => {
             let sigma = band / 3.0;
@@ -228,146 +286,5 @@ fn stratified(near: f32, far: f32, n: usize, rng: &mut impl Rng, z: &mut Vec<f32
 use crate::rng::standard_normal_f32 as standard_normal;
 
 #[cfg(test)]
-mod tests {
-    use nalgebra::{Isometry3, Translation3};
-    use rand::SeedableRng;
-    use rand_chacha::ChaCha8Rng;
-
-    use super::*;
-    use crate::ids::FrameIndex;
-    use crate::sensor::frame::CameraIntrinsics;
-    use crate::sensor::pixel_box::PixelBox;
-
-    /// A 4×2 view 2 m in front of a camera at (0, 0, -2): left half this object, right half other.
-    fn view(frame: u64, depth: f32) -> ObjectView {
-        let states = [
-            PixelState::ThisObject,
-            PixelState::ThisObject,
-            PixelState::OtherObject,
-            PixelState::OtherObject,
-        ];
-        ObjectView {
-            frame: FrameIndex(frame),
-            world_from_camera: Isometry3::from_parts(Translation3::new(0.0, 0.0, -2.0), Default::default()),
-            intrinsics: CameraIntrinsics {
-                width: 8,
-                height: 4,
-                fx: 4.0,
-                fy: 4.0,
-                cx: 4.0,
-                cy: 2.0,
-            },
-            region: PixelBox {
-                u_min: 2,
-                v_min: 1,
-                u_max: 5,
-                v_max: 2,
-            },
-            rgb: vec![[255, 0, 51]; 8],
-            depth_m: vec![depth; 8],
-            states: [states, states].concat(),
-        }
-    }
-
-    #[test]
-    fn a_ray_budget_becomes_pixels_per_keyframe_rounded_up() {
-        assert_eq!(RaySamplerConfig::OBJECT.with_rays_per_step(120).pixels_per_keyframe, 24);
-        assert_eq!(RaySamplerConfig::OBJECT.with_rays_per_step(121).pixels_per_keyframe, 25);
-        assert_eq!(RaySamplerConfig::OBJECT.with_rays_per_step(360).pixels_per_keyframe, 72);
-    }
-
-    #[test]
-    fn the_two_newest_views_always_take_part() {
-        let mut rng = ChaCha8Rng::seed_from_u64(1);
-        for _ in 0..50 {
-            let chosen = choose_step_views(10, &[7, 9], 5, &mut rng);
-            assert_eq!(chosen.len(), 5);
-            assert_eq!(&chosen[..2], &[7, 9]);
-            assert!(chosen[2..].iter().all(|s| *s != 7 && *s != 9 && *s < 10));
-        }
-        assert_eq!(
-            choose_step_views(1, &[0], 5, &mut rng),
-            vec![0; 5],
-            "one view is reused"
-        );
-        assert!(choose_step_views(0, &[], 5, &mut rng).is_empty());
-    }
-
-    #[test]
-    fn samples_follow_the_pixel_state_and_lie_on_the_pixel_ray() {
-        let views = [view(0, 2.0), view(1, 2.0)];
-        let refs: Vec<&ObjectView> = views.iter().collect();
-        let origin = Point3::new(0.0, 0.0, 1.0);
-        let cfg = RaySamplerConfig::OBJECT;
-        let rays = sample_training_rays(&refs, &[0, 1], &origin, &cfg, &mut ChaCha8Rng::seed_from_u64(3));
-        rays.validate().expect("consistent arrays");
-        assert_eq!(rays.num_rays(), 120);
-        assert_eq!(rays.samples_per_ray, 10);
-        for r in 0..rays.num_rays() {
-            let z = &rays.z[r * 10..(r + 1) * 10];
-            assert!(z.windows(2).all(|w| w[0] <= w[1]), "sorted {z:?}");
-            assert!(
-                z[0] >= 0.0 && z[0] <= 1.9 + 1e-6,
-                "free sample before the band: {}",
-                z[0]
-            );
-            match rays.states[r] {
-                PixelState::ThisObject => assert!(z[1..].iter().all(|&zi| (zi - 2.0).abs() <= 0.1 + 1e-6)),
-                _ => assert!(z[1..].iter().all(|&zi| (1.9 - 1e-6..=2.05 + 1e-6).contains(&zi))),
-            }
-            // Camera at z = −2 looking along +z; the field frame's origin is at z = 1, so a
-            // sample at depth zi has field-frame z = −2 + zi − 1.
-            for (j, p) in rays.points[r * 10..(r + 1) * 10].iter().enumerate() {
-                assert!((p[2] - (z[j] - 3.0)).abs() < 1e-5, "point {p:?} depth {}", z[j]);
-            }
-            assert_eq!(rays.rgb[r], [1.0, 0.0, 0.2]);
-        }
-        let own = rays.states.iter().filter(|s| **s == PixelState::ThisObject).count();
-        assert!(
-            (30..=90).contains(&own),
-            "pixels are drawn across the whole box: {own} own of 120"
-        );
-    }
-
-    #[test]
-    fn invalid_depth_samples_up_to_the_deepest_valid_ray() {
-        let views = [view(0, 3.0), view(1, 0.0)];
-        let refs: Vec<&ObjectView> = views.iter().collect();
-        let cfg = RaySamplerConfig {
-            keyframes_per_step: 2,
-            ..RaySamplerConfig::OBJECT
-        };
-        let rays = sample_training_rays(
-            &refs,
-            &[0, 1],
-            &Point3::origin(),
-            &cfg,
-            &mut ChaCha8Rng::seed_from_u64(4),
-        );
-        let invalid: Vec<usize> = (0..rays.num_rays()).filter(|&r| rays.depth_m[r] == 0.0).collect();
-        assert_eq!(invalid.len(), 24, "the second view's pixels have no depth");
-        for r in invalid {
-            let z = &rays.z[r * 10..(r + 1) * 10];
-            assert!(z.iter().all(|&zi| (0.0..=3.0).contains(&zi)), "{z:?}");
-            assert!(z[9] > 2.7, "the last stratum reaches the deepest valid ray");
-        }
-    }
-
-    #[test]
-    fn the_same_seed_draws_the_same_rays() {
-        let views = [view(0, 2.0), view(1, 2.5), view(2, 1.5)];
-        let refs: Vec<&ObjectView> = views.iter().collect();
-        let draw = |seed| {
-            let cfg = RaySamplerConfig::OBJECT;
-            sample_training_rays(
-                &refs,
-                &[1, 2],
-                &Point3::origin(),
-                &cfg,
-                &mut ChaCha8Rng::seed_from_u64(seed),
-            )
-        };
-        assert_eq!(draw(9), draw(9));
-        assert_ne!(draw(9), draw(10));
-    }
-}
+#[path = "ray_sampler_tests.rs"]
+mod tests;

@@ -4,6 +4,7 @@
 //! depth), with one target per ray: the measured depth, colour and the pixel's state relative
 //! to the field's object.
 
+use super::free_space::CarveCounts;
 use crate::error::{CatmapError, Result};
 use crate::objects::object_view::PixelState;
 
@@ -22,6 +23,9 @@ pub struct RaySamples {
     pub rgb: Vec<[f32; 3]>,
     /// State of each ray's pixel relative to the field's object. `R`.
     pub states: Vec<PixelState>,
+    /// How many samples lie inside the object's box and how many of those carve free space
+    /// (zero when the sampler was given no box).
+    pub carve: CarveCounts,
 }
 
 impl RaySamples {
@@ -60,6 +64,34 @@ impl RaySamples {
 }
 
 impl RaySamples {
+    /// The same rays reordered so that those whose colour the loss reads (this object's and
+    /// unknown pixels) come first, each group in its original order. A training step then runs
+    /// the colour branch on a prefix of each chunk only ([`super::heads`]).
+    pub fn with_colour_rays_first(self) -> Self {
+        let reads_colour = |s: &PixelState| *s != PixelState::OtherObject;
+        if self.states.is_sorted_by_key(|s| !reads_colour(s)) {
+            return self;
+        }
+        let spr = self.samples_per_ray;
+        let mut order: Vec<usize> = (0..self.num_rays()).collect();
+        order.sort_by_key(|&r| !reads_colour(&self.states[r]));
+        Self {
+            samples_per_ray: spr,
+            points: order
+                .iter()
+                .flat_map(|&r| self.points[r * spr..(r + 1) * spr].iter().copied())
+                .collect(),
+            z: order
+                .iter()
+                .flat_map(|&r| self.z[r * spr..(r + 1) * spr].iter().copied())
+                .collect(),
+            depth_m: order.iter().map(|&r| self.depth_m[r]).collect(),
+            rgb: order.iter().map(|&r| self.rgb[r]).collect(),
+            states: order.iter().map(|&r| self.states[r]).collect(),
+            carve: self.carve,
+        }
+    }
+
     /// Random rays for benchmarks and gradient checks: origins in a ±`half_box_m` cube, sample
     /// depths increasing from 0.2–0.6 m in steps of 1–20 cm, measured depths in 0.3–3 m (a
     /// fraction `invalid_fraction` of them invalid), random colours and all three pixel states.

@@ -49,6 +49,17 @@ impl Default for ObjectMeshConfig {
     }
 }
 
+impl ObjectMeshConfig {
+    /// The region an object with box `b` is meshed in: `b` grown about its centre so that `b`
+    /// fills `box_fill` of it along each axis (the grid [`ObjectGrid::new`] samples).
+    pub fn meshed_box(&self, b: &OrientedBox) -> OrientedBox {
+        OrientedBox {
+            half_extents: b.half_extents / self.box_fill,
+            ..*b
+        }
+    }
+}
+
 /// Where an object's field lives: its frame and its box size in that frame.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ObjectFrame {

@@ -90,6 +90,7 @@ pub(crate) struct MapperState {
     category_pending: u64,
     category_steps: u64,
     category_losses: Vec<f32>,
+    category_carve: Vec<catmap::field::free_space::CarveCounts>,
     category_fields_created: u32,
     category_remaps: u32,
     /// Each category field's creation number (its key in the step scheduler).
@@ -176,6 +177,7 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
         category_pending: category.pending,
         category_steps: category.steps_done,
         category_losses: category.losses.clone(),
+        category_carve: category.carve.clone(),
         category_fields_created: category.fields_created,
         category_remaps: category.remaps,
         category_ids: category.ids.clone(),
@@ -348,6 +350,7 @@ pub(crate) fn restore(
     category.pending = state.category_pending;
     category.steps_done = state.category_steps;
     category.losses = state.category_losses;
+    category.carve = state.category_carve;
     category.fields_created = state.category_fields_created;
     category.remaps = state.category_remaps;
     category.ids = state.category_ids;

@@ -135,6 +135,9 @@ pub struct FieldLoss {
     pub latest: catmap::field::FieldLosses,
     /// Steps this field has taken.
     pub steps: u64,
+    /// Its samples inside the object's meshed box over all those steps, and how many carved
+    /// free space.
+    pub carve: catmap::field::free_space::CarveCounts,
 }
 
 /// The latest preview mesh extracted from the entity's field (world coordinates), for live

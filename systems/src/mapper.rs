@@ -14,7 +14,7 @@ use catmap::{MapperConfig, RgbdFrame};
 use crossbeam_channel::{Receiver, Sender, TrySendError, bounded};
 
 use crate::checkpoint::SavedMapper;
-use crate::components::{Background, Keyframes, ObjectCloud, ObjectRng, VisibleFrames};
+use crate::components::{Background, FieldLoss, Keyframes, Object, ObjectCloud, ObjectRng, VisibleFrames};
 use crate::resources::CategoryFields;
 use crate::resources::{
     CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, SmallInstances, StageTimes,
@@ -208,13 +208,25 @@ impl Mapper {
         Ok(mapper)
     }
 
-    /// How the fields have trained so far: the schedule, each field's steps and state, and why
-    /// the phases after the stream ended.
-    pub fn training_report(&self) -> crate::summary::TrainingReport {
+    /// How the fields have trained so far: the schedule, each field's steps, state and carving
+    /// counts, and why the phases after the stream ended.
+    pub fn training_report(&mut self) -> crate::summary::TrainingReport {
+        use catmap::training::FieldKey;
+        let mut carving = std::collections::BTreeMap::new();
+        let mut owners = self.world.query::<(Option<&Object>, &FieldLoss)>();
+        for (object, loss) in owners.iter(&self.world) {
+            let key = object.map_or(FieldKey::Background, |o| FieldKey::Object(o.id));
+            carving.insert(key, loss.carve);
+        }
+        let categories = self.world.resource::<CategoryFields>();
+        for (id, counts) in categories.ids.iter().zip(&categories.carve) {
+            carving.insert(FieldKey::Category(*id), *counts);
+        }
         crate::summary::TrainingReport::new(
             self.world.resource::<Settings>().0.training_policy(),
             &self.world.resource::<TrainingSchedule>().scheduler,
             self.world.resource::<PhaseProgress>(),
+            &carving,
         )
     }
 

@@ -54,6 +54,8 @@ pub enum OwnerEntity {
     Loss,
     /// Its field's steps.
     Steps,
+    /// The share of its field's samples inside its meshed box that carved free space.
+    CarvingShare,
     /// The norm of its shape code in its category field.
     ShapeCodeNorm,
     /// The norm of its texture code in its category field.
@@ -71,6 +73,7 @@ impl OwnerEntity {
             Self::Mesh => "mesh",
             Self::Loss => "loss",
             Self::Steps => "steps",
+            Self::CarvingShare => "carving_share",
             Self::ShapeCodeNorm => "shape_code_norm",
             Self::TextureCodeNorm => "texture_code_norm",
         }
@@ -86,6 +89,11 @@ pub fn of(owner: Option<ObjectId>, entity: OwnerEntity) -> String {
 /// The loss of category field `k`.
 pub fn category_loss(k: usize) -> String {
     format!("world/categories/{k}/loss")
+}
+
+/// The carving share of category field `k`'s samples (see [`OwnerEntity::CarvingShare`]).
+pub fn category_carving_share(k: usize) -> String {
+    format!("world/categories/{k}/carving_share")
 }
 
 #[cfg(test)]

@@ -100,6 +100,11 @@ pub struct FieldTraining {
     pub state: catmap::training::FieldState,
     /// Steps it had taken when it last converged.
     pub converged_at: Option<u64>,
+    /// Of its samples inside the region its object is meshed in, the share that carved free
+    /// space (`fields.object_rays.box_free_samples`); `None` when it sampled none there. A
+    /// category field's counts start again when its membership changes.
+    #[serde(default)]
+    pub carving_share: Option<f64>,
 }
 
 impl TrainingReport {
@@ -108,6 +113,7 @@ impl TrainingReport {
         schedule: catmap::training::SchedulePolicy,
         scheduler: &catmap::training::StepScheduler,
         phases: &crate::resources::PhaseProgress,
+        carving: &std::collections::BTreeMap<catmap::training::FieldKey, catmap::field::free_space::CarveCounts>,
     ) -> Self {
         use catmap::training::FieldKey;
         let fields = scheduler
@@ -123,6 +129,7 @@ impl TrainingReport {
                     steps: p.steps,
                     state: p.state,
                     converged_at: p.converged_at,
+                    carving_share: carving.get(key).filter(|c| c.inside > 0).map(|c| c.share()),
                 };
                 (name, row)
             })
@@ -277,9 +284,12 @@ impl RunSummary {
             if training.category_end.is_some() {
                 let _ = writeln!(out, "category phase: {}", ended(training.category_end));
             }
-            let _ = writeln!(out, "\n| field | steps | state |\n|---|---:|---|");
+            let _ = writeln!(out, "\n| field | steps | state | carving [%] |\n|---|---:|---|---:|");
             for (name, field) in &training.fields {
-                let _ = writeln!(out, "| {name} | {} | {:?} |", field.steps, field.state);
+                let carving = field
+                    .carving_share
+                    .map_or_else(|| "–".to_owned(), |s| format!("{:.1}", 100.0 * s));
+                let _ = writeln!(out, "| {name} | {} | {:?} | {carving} |", field.steps, field.state);
             }
         }
         let _ = writeln!(out, "\n| stage | seconds |\n|---|---:|");

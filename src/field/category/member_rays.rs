@@ -57,6 +57,7 @@ mod tests {
             depth_m: vec![1.5],
             rgb: vec![[0.1, 0.2, 0.3]],
             states: vec![PixelState::ThisObject],
+            ..RaySamples::default()
         };
         // World box centred at (1, 2, 3), scale 2: world (1, 2, 3) is the NOCS origin.
         let world_from_nocs = Similarity3::from_isometry(Isometry3::translation(1.0, 2.0, 3.0), 2.0);

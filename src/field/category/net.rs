@@ -256,13 +256,15 @@ impl CategoryNet {
         let geo = Rows::new(&s.emb, EMB_LD);
         let [y0, y0c, y1, y1c, y2, y2c, y3, y4, y5, y5c, y6, y7] = &mut s.h;
         let [l_xyz, l_s1, l_cat, l_s2, l_enc, l_sigma, l_view, l_t1, l_rgb0, l_rgb2] = &self.layers;
-        let add = |src: &[f32], dst: &mut [f32], slot: usize| self.add_code(table, src, dst, slot, n, members);
+        let add = |src: &[f32], dst: &mut [f32], slot: usize, rows: usize| {
+            self.add_code(table, src, dst, slot, rows, members);
+        };
         l_xyz.forward(backend, packed, n, &[geo], y0, Activation::Relu);
-        add(y0, y0c, SHAPE_1);
+        add(y0, y0c, SHAPE_1, n);
         l_s1.forward(backend, packed, n, &[Rows::new(y0c, hp)], y1, Activation::Relu);
-        add(y1, y1c, CAT);
+        add(y1, y1c, CAT, n);
         l_cat.forward(backend, packed, n, &[Rows::new(y1c, hp), geo], y2, Activation::Relu);
-        add(y2, y2c, SHAPE_2);
+        add(y2, y2c, SHAPE_2, n);
         l_s2.forward(backend, packed, n, &[Rows::new(y2c, hp)], y3, Activation::Relu);
         l_enc.forward(backend, packed, n, &[Rows::new(y3, hp)], y4, Activation::Linear);
         let a = &mut s.heads.alpha_raw;
@@ -271,14 +273,15 @@ impl CategoryNet {
         if heads == Heads::OccupancyOnly {
             return;
         }
+        let nc = heads.colour_rows(n);
         let col = Rows::new(&s.emb[GEO_DIMS..], EMB_LD);
-        l_view.forward(backend, packed, n, &[Rows::new(y4, hp), col], y5, Activation::Relu);
-        add(y5, y5c, TEXTURE);
-        l_t1.forward(backend, packed, n, &[Rows::new(y5c, hp)], y6, Activation::Relu);
-        l_rgb0.forward(backend, packed, n, &[Rows::new(y6, hp)], y7, Activation::Relu);
+        l_view.forward(backend, packed, nc, &[Rows::new(y4, hp), col], y5, Activation::Relu);
+        add(y5, y5c, TEXTURE, nc);
+        l_t1.forward(backend, packed, nc, &[Rows::new(y5c, hp)], y6, Activation::Relu);
+        l_rgb0.forward(backend, packed, nc, &[Rows::new(y6, hp)], y7, Activation::Relu);
         let c = &mut s.heads.colour_raw;
-        l_rgb2.forward(backend, packed, n, &[Rows::new(y7, hh)], c, Activation::Linear);
-        s.heads.colour_from_raw(n);
+        l_rgb2.forward(backend, packed, nc, &[Rows::new(y7, hh)], c, Activation::Linear);
+        s.heads.colour_from_raw(nc, n);
     }
 
     /// `dst = src + table[member(s), slot]`, row by row.

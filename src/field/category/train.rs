@@ -4,7 +4,7 @@
 use super::super::dense::Rows;
 use super::super::encoding::{self, COL_DIMS, EMB_LD, GEO_DIMS};
 use super::super::gemm::{Init, Post, padded};
-use super::super::heads::HEAD_LD;
+use super::super::heads::{HEAD_LD, HeadBuffers};
 use super::super::loss::{FieldLosses, LossNorm};
 use super::super::occupancy::Heads;
 use super::super::simd::Backend;
@@ -51,6 +51,7 @@ impl CategoryNet {
         };
         let (params, packed) = (input.params, input.packed);
         let points = &samples.points[range];
+        let nc = HeadBuffers::colour_prefix(samples, rays.clone());
         self.forward(
             backend,
             params,
@@ -60,7 +61,7 @@ impl CategoryNet {
             points,
             members,
             s,
-            Heads::All,
+            Heads::ColourOfFirst(nc),
         );
         let losses = s.heads.render_loss_backward(samples, rays, input.norm);
 
@@ -74,19 +75,20 @@ impl CategoryNet {
         let (gp, cp) = (padded(GEO_DIMS), padded(COL_DIMS));
         let d_colour = Rows::new(&s.heads.d_colour, HEAD_LD);
         let d_alpha = Rows::new(&s.heads.d_alpha, HEAD_LD);
-        let code_grad = |d: &mut [f32], y: &[f32], slot: usize, dc: &mut [f32]| {
-            self.code_grad_and_mask(d, y, slot, n, members, dc);
+        let code_grad = |d: &mut [f32], y: &[f32], slot: usize, rows: usize, dc: &mut [f32]| {
+            self.code_grad_and_mask(d, y, slot, rows, members, dc);
         };
-        // rgb.2 → p = d(y7 pre), width W/2.
-        l_rgb2.backward_weights(backend, n, &[Rows::new(y7, hh)], d_colour, grad);
+        // The colour branch runs on the first nc samples only (their colour gradients are the
+        // only non-zero ones). rgb.2 → p = d(y7 pre), width W/2.
+        l_rgb2.backward_weights(backend, nc, &[Rows::new(y7, hh)], d_colour, grad);
         let post = Post::Mask { data: y7, ld: hh };
-        l_rgb2.backward_input(backend, packed, n, 0, d_colour, p, hh, Init::Zero, post);
+        l_rgb2.backward_input(backend, packed, nc, 0, d_colour, p, hh, Init::Zero, post);
         // rgb.0 → q = d(y6 pre).
-        l_rgb0.backward_weights(backend, n, &[Rows::new(y6, hp)], Rows::new(p, hh), grad);
+        l_rgb0.backward_weights(backend, nc, &[Rows::new(y6, hp)], Rows::new(p, hh), grad);
         l_rgb0.backward_input(
             backend,
             packed,
-            n,
+            nc,
             0,
             Rows::new(p, hh),
             q,
@@ -95,11 +97,11 @@ impl CategoryNet {
             Post::Mask { data: y6, ld: hp },
         );
         // texture_layer_1 → p = d(y5 + c_t) → dc_t, then d(y5 pre).
-        l_t1.backward_weights(backend, n, &[Rows::new(y5c, hp)], Rows::new(q, hp), grad);
+        l_t1.backward_weights(backend, nc, &[Rows::new(y5c, hp)], Rows::new(q, hp), grad);
         l_t1.backward_input(
             backend,
             packed,
-            n,
+            nc,
             0,
             Rows::new(q, hp),
             p,
@@ -107,13 +109,13 @@ impl CategoryNet {
             Init::Zero,
             Post::Identity,
         );
-        code_grad(p, y5, TEXTURE, dc);
+        code_grad(p, y5, TEXTURE, nc, dc);
         // encoding_viewdir → q = dy4 (from colour), d_col.
-        l_view.backward_weights(backend, n, &[Rows::new(y4, hp), col], Rows::new(p, hp), grad);
+        l_view.backward_weights(backend, nc, &[Rows::new(y4, hp), col], Rows::new(p, hp), grad);
         l_view.backward_input(
             backend,
             packed,
-            n,
+            nc,
             0,
             Rows::new(p, hp),
             q,
@@ -121,11 +123,12 @@ impl CategoryNet {
             Init::Zero,
             Post::Identity,
         );
+        q[nc * hp..n * hp].fill(0.0);
         let d_col = &mut s.d_col;
         l_view.backward_input(
             backend,
             packed,
-            n,
+            nc,
             1,
             Rows::new(p, hp),
             d_col,
@@ -133,6 +136,7 @@ impl CategoryNet {
             Init::Zero,
             Post::Identity,
         );
+        d_col[nc * cp..n * cp].fill(0.0);
         // sigma → q += dy4 (from α); y4 is linear.
         l_sigma.backward_weights(backend, n, &[Rows::new(y4, hp)], d_alpha, grad);
         l_sigma.backward_input(backend, packed, n, 0, d_alpha, q, hp, Init::Accumulate, Post::Identity);
@@ -162,7 +166,7 @@ impl CategoryNet {
             Init::Zero,
             Post::Identity,
         );
-        code_grad(q, y2, SHAPE_2, dc);
+        code_grad(q, y2, SHAPE_2, n, dc);
         // cat_layer → p = d(y1 + c) → dc, then d(y1 pre); d_geo.
         l_cat.backward_weights(backend, n, &[Rows::new(y1c, hp), geo], Rows::new(q, hp), grad);
         l_cat.backward_input(
@@ -188,7 +192,7 @@ impl CategoryNet {
             Init::Zero,
             Post::Identity,
         );
-        code_grad(p, y1, CAT, dc);
+        code_grad(p, y1, CAT, n, dc);
         // shape_layer_1 → q = d(y0 + c) → dc, then d(y0 pre).
         l_s1.backward_weights(backend, n, &[Rows::new(y0c, hp)], Rows::new(p, hp), grad);
         l_s1.backward_input(
@@ -202,7 +206,7 @@ impl CategoryNet {
             Init::Zero,
             Post::Identity,
         );
-        code_grad(q, y0, SHAPE_1, dc);
+        code_grad(q, y0, SHAPE_1, n, dc);
         // encoding_xyz → d_geo += ….
         l_xyz.backward_weights(backend, n, &[geo], Rows::new(q, hp), grad);
         let d_geo = &mut s.d_geo;

@@ -174,6 +174,7 @@ impl OccupancyNet {
             Activation::Linear,
         );
         s.heads.occupancy_from_raw(n);
+        let nc = heads.colour_rows(n);
         if heads == Heads::OccupancyOnly {
             return;
         }
@@ -184,7 +185,7 @@ impl OccupancyNet {
         l5.forward(
             backend,
             packed,
-            n,
+            nc,
             &[Rows { data: h4, ld: hp }, col],
             h5,
             Activation::Relu,
@@ -192,12 +193,12 @@ impl OccupancyNet {
         lc.forward(
             backend,
             packed,
-            n,
+            nc,
             &[Rows { data: h5, ld: hp }],
             &mut s.heads.colour_raw,
             Activation::Linear,
         );
-        s.heads.colour_from_raw(n);
+        s.heads.colour_from_raw(nc, n);
     }
 
     /// Occupancy of the last forward pass (n values).
@@ -223,6 +224,20 @@ pub(crate) enum Heads {
     OccupancyOnly,
     /// Occupancy and colour.
     All,
+    /// Occupancy of every sample, colour of the first this many (training: the samples of rays
+    /// whose colour the loss reads; the others' colours are 0).
+    ColourOfFirst(usize),
+}
+
+impl Heads {
+    /// How many of `n` samples get a colour.
+    pub(crate) fn colour_rows(self, n: usize) -> usize {
+        match self {
+            Self::OccupancyOnly => 0,
+            Self::All => n,
+            Self::ColourOfFirst(k) => k.min(n),
+        }
+    }
 }
 
 const fn encoding_rows() -> usize {

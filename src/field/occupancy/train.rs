@@ -3,7 +3,7 @@
 use super::super::dense::Rows;
 use super::super::encoding::{self, COL_DIMS, EMB_LD, GEO_DIMS};
 use super::super::gemm::{Init, Post, padded};
-use super::super::heads::HEAD_LD;
+use super::super::heads::{HEAD_LD, HeadBuffers};
 use super::super::loss::{FieldLosses, LossNorm};
 use super::super::samples::RaySamples;
 use super::super::simd::Backend;
@@ -28,7 +28,9 @@ impl OccupancyNet {
         let samples = rays_range.start * spr..rays_range.end * spr;
         let n = samples.len();
         let hp = self.hp();
-        self.forward(backend, params, packed, scale, &rays.points[samples], s, Heads::All);
+        let nc = HeadBuffers::colour_prefix(rays, rays_range.clone());
+        let heads = Heads::ColourOfFirst(nc);
+        self.forward(backend, params, packed, scale, &rays.points[samples], s, heads);
         let losses = s.heads.render_loss_backward(rays, rays_range, norm);
 
         // Backward through the MLP, heads first.
@@ -52,12 +54,13 @@ impl OccupancyNet {
             data: &s.heads.d_alpha,
             ld: HEAD_LD,
         };
-        // out_color: p = d(h5 pre-activation)
-        lc.backward_weights(backend, n, &[Rows::new(h5, hp)], d_colour, grad);
+        // out_color: p = d(h5 pre-activation); the colour branch runs on the first nc samples
+        // only (their colour gradients are the only non-zero ones).
+        lc.backward_weights(backend, nc, &[Rows::new(h5, hp)], d_colour, grad);
         lc.backward_input(
             backend,
             packed,
-            n,
+            nc,
             0,
             d_colour,
             p,
@@ -66,11 +69,11 @@ impl OccupancyNet {
             Post::Mask { data: h5, ld: hp },
         );
         // color_linear: q = dh4 (from colour), d_col
-        l5.backward_weights(backend, n, &[Rows::new(h4, hp), col], Rows::new(p, hp), grad);
+        l5.backward_weights(backend, nc, &[Rows::new(h4, hp), col], Rows::new(p, hp), grad);
         l5.backward_input(
             backend,
             packed,
-            n,
+            nc,
             0,
             Rows::new(p, hp),
             q,
@@ -78,10 +81,11 @@ impl OccupancyNet {
             Init::Zero,
             Post::Identity,
         );
+        q[nc * hp..n * hp].fill(0.0);
         l5.backward_input(
             backend,
             packed,
-            n,
+            nc,
             1,
             Rows::new(p, hp),
             &mut s.d_col,
@@ -89,6 +93,7 @@ impl OccupancyNet {
             Init::Zero,
             Post::Identity,
         );
+        s.d_col[nc * cp..n * cp].fill(0.0);
         // out_alpha: q = d(h4 pre-activation)
         la.backward_weights(backend, n, &[Rows::new(h4, hp)], d_alpha, grad);
         la.backward_input(

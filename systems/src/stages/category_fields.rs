@@ -7,6 +7,7 @@ use bevy_ecs::prelude::*;
 use catmap::FrameIndex;
 use catmap::categories::field_set::MemberRays;
 use catmap::field::{RaySamplerConfig, sample_window_rays};
+use catmap::meshing::ObjectMeshConfig;
 use rayon::prelude::*;
 
 use crate::components::{CameraFrame, CategorySlot, FieldRng, FieldSlot, Keyframes, LatestBox, Object, Subcategories};
@@ -83,24 +84,27 @@ pub fn train_category_fields(
         .scheduler
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
     schedule.planned_categories = plan.indices.len();
-    let rays = fields.member_rays(
-        objects.iter().count(),
-        &config.category_fields,
-        &config.fields.object_rays,
-    );
+    let rays = fields.member_rays(objects.iter().count(), &config.category_fields, &config.object_rays());
+    let meshing = &config.meshes.object;
     for _ in 0..pending {
         if plan.indices.is_empty() {
             continue;
         }
-        let step = fields.train_step(&plan, sample_members(&mut members, &plan.indices, &rays));
+        let step = fields.train_step(&plan, sample_members(&mut members, &plan.indices, &rays, meshing));
         schedule.record_step(&plan.keys, step, &config.schedule.plateau, "category");
         fields.steps_done += 1;
     }
 }
 
 /// The rays of every member of the `active` fields for one step, each drawn from its own
-/// keyframes and generator with its field's settings `rays` (members in parallel).
-fn sample_members(members: &mut Members, active: &[usize], rays: &[RaySamplerConfig]) -> Vec<MemberRays> {
+/// keyframes and generator with its field's settings `rays`, carving the region its mesh is
+/// extracted in (its NOCS box, `meshing`'s fill; members in parallel).
+fn sample_members(
+    members: &mut Members,
+    active: &[usize],
+    rays: &[RaySamplerConfig],
+    meshing: &ObjectMeshConfig,
+) -> Vec<MemberRays> {
     let mut work: Vec<_> = members
         .iter_mut()
         .filter(|(_, _, slot, ..)| active.binary_search(&slot.field).is_ok())
@@ -109,7 +113,13 @@ fn sample_members(members: &mut Members, active: &[usize], rays: &[RaySamplerCon
         .map(|(keyframes, field_slot, slot, _, rng)| MemberRays {
             place: slot.0,
             origin: field_slot.origin,
-            rays: sample_window_rays(&keyframes.0, &field_slot.origin, &rays[slot.field], &mut rng.0),
+            rays: sample_window_rays(
+                &keyframes.0,
+                &field_slot.origin,
+                Some(&meshing.meshed_box(&slot.0.nocs.oriented_box())),
+                &rays[slot.field],
+                &mut rng.0,
+            ),
         })
         .collect()
 }

@@ -1,5 +1,5 @@
 //! Rerun logging of the category phase: each category field's loss under
-//! `world/categories/{k}/loss`, and each member's code norms under
+//! `world/categories/{k}/loss` and carving share under `…/carving_share`, and each member's code norms under
 //! `world/objects/{id}/shape_code_norm` and `…/texture_code_norm`, on the `category_step` timeline.
 
 use bevy_ecs::prelude::*;
@@ -20,6 +20,13 @@ pub fn log_category_training(rerun: Res<Rerun>, fields: Res<CategoryFields>, mem
         let path = paths::category_loss(k);
         warn_on_error(
             rerun.0.log(path.as_str(), &rerun::Scalars::single(f64::from(*loss))),
+            &path,
+        );
+    }
+    for (k, counts) in fields.carve.iter().enumerate().filter(|(_, c)| c.inside > 0) {
+        let path = paths::category_carving_share(k);
+        warn_on_error(
+            rerun.0.log(path.as_str(), &rerun::Scalars::single(counts.share())),
             &path,
         );
     }

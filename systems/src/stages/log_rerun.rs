@@ -215,6 +215,11 @@ pub fn log_field_losses(
         let path = paths::of(owner, OwnerEntity::Steps);
         let steps = rerun::Scalars::single(loss.steps as f64);
         warn_on_error(rerun.0.log(path.as_str(), &steps), &path);
+        if loss.carve.inside > 0 {
+            let path = paths::of(owner, OwnerEntity::CarvingShare);
+            let share = rerun::Scalars::single(loss.carve.share());
+            warn_on_error(rerun.0.log(path.as_str(), &share), &path);
+        }
     }
 }
 

@@ -11,6 +11,7 @@ use nalgebra::Point3;
 use rayon::prelude::*;
 
 use catmap::FrameIndex;
+use catmap::meshing::ObjectMeshConfig;
 use catmap::training::{BatchPlan, FieldFacts, MeshSource, StreamPhase, object_field_facts};
 
 use crate::components::{
@@ -88,8 +89,8 @@ enum FieldOwner {
     Background,
 }
 
-/// The owners of fields: whether it is the background, the object (and its latest sighting
-/// and category membership), its keyframes, slot, generator and loss.
+/// The owners of fields: whether it is the background, the object (and its latest sighting,
+/// category membership and box), its keyframes, slot, generator and loss.
 type FieldOwners<'w, 's> = Query<
     'w,
     's,
@@ -98,6 +99,7 @@ type FieldOwners<'w, 's> = Query<
         Option<&'static Object>,
         Option<&'static LatestBox>,
         Has<CategorySlot>,
+        Option<&'static ObjectBounds>,
         &'static Keyframes,
         &'static FieldSlot,
         &'static mut FieldRng,
@@ -129,6 +131,7 @@ pub fn train_fields(
         .scheduler
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
     schedule.planned_objects = plan.indices.len();
+    let object_rays = config.object_rays();
     for _ in 0..std::mem::take(&mut queue.pending) {
         if !plan.indices.is_empty() {
             let step = train_one(
@@ -136,13 +139,15 @@ pub fn train_fields(
                 FieldOwner::Objects,
                 &plan,
                 &mut fields.objects,
-                &cfg.object_rays,
+                &object_rays,
+                &config.meshes.object,
             );
             schedule.record_step(&plan.keys, step, &config.schedule.plateau, "object");
         }
         if cfg.background_due(queue.steps_done) && !fields.background.is_empty() {
             let (plan, batch) = (BatchPlan::background(), &mut fields.background);
-            if let Err(e) = train_one(&mut owners, FieldOwner::Background, &plan, batch, &cfg.background_rays) {
+            let (rays, meshing) = (&cfg.background_rays, &config.meshes.object);
+            if let Err(e) = train_one(&mut owners, FieldOwner::Background, &plan, batch, rays, meshing) {
                 tracing::warn!(error = %e, "background training step skipped");
             }
         }
@@ -154,7 +159,7 @@ pub fn train_fields(
 fn object_facts(owners: &FieldOwners, phase: StreamPhase, tick: &[FrameIndex]) -> Vec<(usize, FieldFacts)> {
     owners
         .iter()
-        .filter_map(|(_, object, latest, member, _, slot, ..)| {
+        .filter_map(|(_, object, latest, member, _, _, slot, ..)| {
             let last_seen = latest.map(LatestBox::last_seen);
             let mesh = MeshSource::of_category_member(member);
             Some((slot.index, object_field_facts(object?.id, last_seen, mesh, phase, tick)))
@@ -163,14 +168,16 @@ fn object_facts(owners: &FieldOwners, phase: StreamPhase, tick: &[FrameIndex]) -
 }
 
 /// One step of the fields `plan` names (ascending indices in `batch`; learning rates scaled by
-/// its factors): samples their owners' rays (the background's, or the objects') in parallel, trains, and
-/// records each owner's losses; returns their total losses, in index order.
+/// its factors): samples their owners' rays (the background's, or the objects', carving the
+/// region each object is meshed in) in parallel, trains, and records each owner's losses and
+/// carving counts; returns their total losses, in index order.
 fn train_one(
     owners: &mut FieldOwners,
     owner: FieldOwner,
     plan: &BatchPlan,
     batch: &mut catmap::field::FieldBatch,
     rays: &RaySamplerConfig,
+    meshing: &ObjectMeshConfig,
 ) -> catmap::Result<Vec<f32>> {
     let indices = &plan.indices[..];
     let background = owner == FieldOwner::Background;
@@ -179,10 +186,13 @@ fn train_one(
         .filter(|(is_background, .., slot, _, _)| {
             *is_background == background && indices.binary_search(&slot.index).is_ok()
         })
-        .map(|(_, _, _, _, keyframes, slot, rng, loss)| (keyframes, slot, rng, loss))
+        .map(|(_, _, _, _, bounds, keyframes, slot, rng, loss)| {
+            let object_box = bounds.map(|b| meshing.meshed_box(&b.oriented_box));
+            (keyframes, slot, rng, loss, object_box)
+        })
         .collect();
-    work.sort_by_key(|(_, slot, _, _)| slot.index);
-    let owned: Vec<usize> = work.iter().map(|(_, slot, _, _)| slot.index).collect();
+    work.sort_by_key(|(_, slot, ..)| slot.index);
+    let owned: Vec<usize> = work.iter().map(|(_, slot, ..)| slot.index).collect();
     if owned != indices || indices.last().is_some_and(|&i| i >= batch.len()) {
         return Err(catmap::CatmapError::Degenerate(format!(
             "{} fields but owners with slots {owned:?} for the planned {indices:?}",
@@ -191,12 +201,15 @@ fn train_one(
     }
     let fields: Vec<RaySamples> = work
         .par_iter_mut()
-        .map(|(keyframes, slot, rng, _)| sample_window_rays(&keyframes.0, &slot.origin, rays, &mut rng.0))
+        .map(|(keyframes, slot, rng, _, object_box)| {
+            sample_window_rays(&keyframes.0, &slot.origin, object_box.as_ref(), rays, &mut rng.0)
+        })
         .collect();
     let losses = batch.train_step_scaled(indices, &plan.learning_rate_scales, &fields)?;
-    for ((.., loss), latest) in work.iter_mut().zip(&losses) {
+    for (((.., loss, _), latest), sampled) in work.iter_mut().zip(&losses).zip(&fields) {
         loss.latest = *latest;
         loss.steps += 1;
+        loss.carve = loss.carve + sampled.carve;
     }
     Ok(losses.iter().map(|l| l.total).collect())
 }

@@ -60,7 +60,12 @@ fn setup(
 
 fn check_against_candle(seed: u64, members: &[usize], code_dim: usize, rays: usize, spr: usize, backend: Backend) {
     let (mut batch, samples) = setup(seed, members, code_dim, rays, spr, backend);
-    let (losses, grads) = batch.loss_and_gradients(&samples).expect("shapes agree");
+    check_samples_against_candle(&mut batch, &samples, backend);
+}
+
+/// The fused step's losses and gradients (weights and codes) on `samples` against candle's.
+fn check_samples_against_candle(batch: &mut CategoryBatch, samples: &[CategorySamples], backend: Backend) {
+    let (losses, grads) = batch.loss_and_gradients(samples).expect("shapes agree");
     for (c, field) in batch.fields().iter().enumerate() {
         let reference = category_reference(field, &samples[c], DType::F64).expect("candle runs");
         let l = losses[c];
@@ -94,6 +99,25 @@ fn check_against_candle(seed: u64, members: &[usize], code_dim: usize, rays: usi
                 "{backend:?} category {c}: gradient of member {m}'s codes off by {rel:.2e}"
             );
         }
+    }
+}
+
+#[test]
+fn rays_of_other_objects_last_skip_the_colour_branch_and_keep_the_gradients() {
+    // Each member's rays as the sampler orders them (its own first), members one after the
+    // other: chunks end in rays whose colour branch the step skips.
+    for backend in [Backend::detect(), Backend::Scalar] {
+        let (mut batch, samples) = setup(7, &[3, 2], 8, 40, 10, backend);
+        let ordered: Vec<CategorySamples> = samples
+            .into_iter()
+            .map(|s| {
+                let mut members = s.members.clone();
+                let rays = s.rays.with_colour_rays_first();
+                members.sort_unstable();
+                CategorySamples { rays, members }
+            })
+            .collect();
+        check_samples_against_candle(&mut batch, &ordered, backend);
     }
 }
 

@@ -6,6 +6,7 @@ use candle_core::DType;
 use catmap::field::reference::{occupancy_reference, worst_tensor_error};
 use catmap::field::{AdamWConfig, Backend, FieldBatch, OccupancyField, RaySamples};
 use catmap::ids::ObjectId;
+use catmap::objects::object_view::PixelState;
 use catmap::rng::{RngStream, seeded_rng};
 
 /// The field with its α head scaled down by 10 (see [`super::scale_tensors`]).
@@ -41,7 +42,12 @@ fn setup(
 
 fn check_against_candle(seed: u64, hidden: &[usize], rays: usize, samples_per_ray: usize, backend: Backend) {
     let (mut batch, samples) = setup(seed, hidden, rays, samples_per_ray, backend);
-    let (losses, grads) = batch.loss_and_gradients(&samples).expect("shapes agree");
+    check_samples_against_candle(&mut batch, &samples, backend);
+}
+
+/// The fused step's losses and gradients on `samples` against candle's.
+fn check_samples_against_candle(batch: &mut FieldBatch, samples: &[RaySamples], backend: Backend) {
+    let (losses, grads) = batch.loss_and_gradients(samples).expect("shapes agree");
     for (f, field) in batch.fields().iter().enumerate() {
         let reference = occupancy_reference(field.hidden(), field.scale(), field.params(), &samples[f], DType::F64)
             .expect("candle runs");
@@ -69,6 +75,28 @@ fn check_against_candle(seed: u64, hidden: &[usize], rays: usize, samples_per_ra
 #[test]
 fn object_field_gradients_match_candle_autograd() {
     check_against_candle(1, &[32, 32, 32], 24, 10, Backend::detect());
+}
+
+#[test]
+fn rays_of_other_objects_last_skip_the_colour_branch_and_keep_the_gradients() {
+    // As the sampler orders them: chunks end in (or are all) rays whose colour is not read,
+    // whose colour branch the step skips.
+    for backend in [Backend::detect(), Backend::Scalar] {
+        let (mut batch, samples) = setup(6, &[32, 32], 40, 10, backend);
+        let ordered: Vec<RaySamples> = samples.into_iter().map(RaySamples::with_colour_rays_first).collect();
+        let others = |s: &RaySamples| {
+            s.states
+                .iter()
+                .rev()
+                .take_while(|s| **s == PixelState::OtherObject)
+                .count()
+        };
+        assert!(
+            ordered.iter().all(|s| others(s) >= 12),
+            "a whole chunk of other rays at the end"
+        );
+        check_samples_against_candle(&mut batch, &ordered, backend);
+    }
 }
 
 #[test]

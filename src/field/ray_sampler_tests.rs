@@ -1,0 +1,225 @@
+//! Unit tests of the ray sampler (`ray_sampler.rs`).
+
+use nalgebra::{Isometry3, Translation3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use super::*;
+use crate::ids::FrameIndex;
+use crate::sensor::frame::CameraIntrinsics;
+use crate::sensor::pixel_box::PixelBox;
+
+/// A 4×2 view 2 m in front of a camera at (0, 0, -2): left half this object, right half other.
+fn view(frame: u64, depth: f32) -> ObjectView {
+    let states = [
+        PixelState::ThisObject,
+        PixelState::ThisObject,
+        PixelState::OtherObject,
+        PixelState::OtherObject,
+    ];
+    ObjectView {
+        frame: FrameIndex(frame),
+        world_from_camera: Isometry3::from_parts(Translation3::new(0.0, 0.0, -2.0), Default::default()),
+        intrinsics: CameraIntrinsics {
+            width: 8,
+            height: 4,
+            fx: 4.0,
+            fy: 4.0,
+            cx: 4.0,
+            cy: 2.0,
+        },
+        region: PixelBox {
+            u_min: 2,
+            v_min: 1,
+            u_max: 5,
+            v_max: 2,
+        },
+        rgb: vec![[255, 0, 51]; 8],
+        depth_m: vec![depth; 8],
+        states: [states, states].concat(),
+    }
+}
+
+#[test]
+fn a_ray_budget_becomes_pixels_per_keyframe_rounded_up() {
+    assert_eq!(RaySamplerConfig::OBJECT.with_rays_per_step(120).pixels_per_keyframe, 24);
+    assert_eq!(RaySamplerConfig::OBJECT.with_rays_per_step(121).pixels_per_keyframe, 25);
+    assert_eq!(RaySamplerConfig::OBJECT.with_rays_per_step(360).pixels_per_keyframe, 72);
+}
+
+#[test]
+fn the_two_newest_views_always_take_part() {
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    for _ in 0..50 {
+        let chosen = choose_step_views(10, &[7, 9], 5, &mut rng);
+        assert_eq!(chosen.len(), 5);
+        assert_eq!(&chosen[..2], &[7, 9]);
+        assert!(chosen[2..].iter().all(|s| *s != 7 && *s != 9 && *s < 10));
+    }
+    assert_eq!(
+        choose_step_views(1, &[0], 5, &mut rng),
+        vec![0; 5],
+        "one view is reused"
+    );
+    assert!(choose_step_views(0, &[], 5, &mut rng).is_empty());
+}
+
+#[test]
+fn samples_follow_the_pixel_state_and_lie_on_the_pixel_ray() {
+    let views = [view(0, 2.0), view(1, 2.0)];
+    let refs: Vec<&ObjectView> = views.iter().collect();
+    let origin = Point3::new(0.0, 0.0, 1.0);
+    let cfg = RaySamplerConfig::OBJECT;
+    let rays = sample_training_rays(&refs, &[0, 1], &origin, None, &cfg, &mut ChaCha8Rng::seed_from_u64(3));
+    rays.validate().expect("consistent arrays");
+    assert_eq!(rays.num_rays(), 120);
+    assert_eq!(rays.samples_per_ray, 10);
+    for r in 0..rays.num_rays() {
+        let z = &rays.z[r * 10..(r + 1) * 10];
+        assert!(z.windows(2).all(|w| w[0] <= w[1]), "sorted {z:?}");
+        assert!(
+            z[0] >= 0.0 && z[0] <= 1.9 + 1e-6,
+            "free sample before the band: {}",
+            z[0]
+        );
+        match rays.states[r] {
+            PixelState::ThisObject => assert!(z[1..].iter().all(|&zi| (zi - 2.0).abs() <= 0.1 + 1e-6)),
+            _ => assert!(z[1..].iter().all(|&zi| (1.9 - 1e-6..=2.05 + 1e-6).contains(&zi))),
+        }
+        // Camera at z = −2 looking along +z; the field frame's origin is at z = 1, so a
+        // sample at depth zi has field-frame z = −2 + zi − 1.
+        for (j, p) in rays.points[r * 10..(r + 1) * 10].iter().enumerate() {
+            assert!((p[2] - (z[j] - 3.0)).abs() < 1e-5, "point {p:?} depth {}", z[j]);
+        }
+        assert_eq!(rays.rgb[r], [1.0, 0.0, 0.2]);
+    }
+    let own = rays.states.iter().filter(|s| **s == PixelState::ThisObject).count();
+    assert!(
+        (30..=90).contains(&own),
+        "pixels are drawn across the whole box: {own} own of 120"
+    );
+}
+
+#[test]
+fn box_samples_carve_the_part_of_each_ray_inside_the_box_before_the_surface() {
+    // The views' surface is at world z = 0 (depth 2 from the camera at z = −2); the object's
+    // box spans z ∈ [−0.8, −0.2], depths 1.2–1.8: every ray crosses it before its band.
+    let views = [view(0, 2.0), view(1, 2.0)];
+    let refs: Vec<&ObjectView> = views.iter().collect();
+    let object_box = OrientedBox {
+        world_from_box: nalgebra::Isometry3::translation(0.0, 0.0, -0.5),
+        half_extents: Vector3::new(2.0, 2.0, 0.3),
+    };
+    let draw = |box_free_samples| {
+        let cfg = RaySamplerConfig {
+            box_free_samples: Some(box_free_samples),
+            ..RaySamplerConfig::OBJECT
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        sample_training_rays(&refs, &[0, 1], &Point3::origin(), Some(&object_box), &cfg, &mut rng)
+    };
+    let carving = draw(3);
+    carving.validate().expect("consistent arrays");
+    assert_eq!(carving.samples_per_ray, 13);
+    for r in 0..carving.num_rays() {
+        let z = &carving.z[r * 13..(r + 1) * 13];
+        assert!(z.windows(2).all(|w| w[0] <= w[1]), "sorted {z:?}");
+        let in_box = z.iter().filter(|&&zi| (1.2 - 1e-5..=1.8 + 1e-5).contains(&zi)).count();
+        assert!(in_box >= 3, "ray {r}: the three box samples lie in the box: {z:?}");
+    }
+    assert!(
+        carving.carve.inside >= 3 * 120 && carving.carve.carving == carving.carve.inside,
+        "every sample inside the box carves it: {:?}",
+        carving.carve
+    );
+    // vMAP's sampler: one free sample per ray over [0, 1.9], inside the box 6/19 of the time.
+    let vmap = draw(0);
+    assert_eq!(vmap.samples_per_ray, 10);
+    assert!(
+        (20..=60).contains(&vmap.carve.carving),
+        "one ray in three carves: {:?}",
+        vmap.carve
+    );
+    let unboxed = sample_training_rays(
+        &refs,
+        &[0, 1],
+        &Point3::origin(),
+        None,
+        &RaySamplerConfig::OBJECT,
+        &mut ChaCha8Rng::seed_from_u64(5),
+    );
+    let vmap_uncounted = RaySamples {
+        carve: CarveCounts::default(),
+        ..vmap
+    };
+    assert_eq!(unboxed, vmap_uncounted, "no box: vMAP's sampler, the same draws");
+}
+
+#[test]
+fn rays_whose_colour_is_read_come_first() {
+    let views = [view(0, 2.0), view(1, 2.0)];
+    let refs: Vec<&ObjectView> = views.iter().collect();
+    let cfg = RaySamplerConfig::OBJECT;
+    let rays = sample_training_rays(
+        &refs,
+        &[0, 1],
+        &Point3::origin(),
+        None,
+        &cfg,
+        &mut ChaCha8Rng::seed_from_u64(6),
+    );
+    let first_other = rays
+        .states
+        .iter()
+        .position(|s| *s == PixelState::OtherObject)
+        .expect("some");
+    assert!(first_other > 0, "some own rays");
+    assert!(
+        rays.states[first_other..].iter().all(|s| *s == PixelState::OtherObject),
+        "own rays first"
+    );
+}
+
+#[test]
+fn invalid_depth_samples_up_to_the_deepest_valid_ray() {
+    let views = [view(0, 3.0), view(1, 0.0)];
+    let refs: Vec<&ObjectView> = views.iter().collect();
+    let cfg = RaySamplerConfig {
+        keyframes_per_step: 2,
+        ..RaySamplerConfig::OBJECT
+    };
+    let rays = sample_training_rays(
+        &refs,
+        &[0, 1],
+        &Point3::origin(),
+        None,
+        &cfg,
+        &mut ChaCha8Rng::seed_from_u64(4),
+    );
+    let invalid: Vec<usize> = (0..rays.num_rays()).filter(|&r| rays.depth_m[r] == 0.0).collect();
+    assert_eq!(invalid.len(), 24, "the second view's pixels have no depth");
+    for r in invalid {
+        let z = &rays.z[r * 10..(r + 1) * 10];
+        assert!(z.iter().all(|&zi| (0.0..=3.0).contains(&zi)), "{z:?}");
+        assert!(z[9] > 2.7, "the last stratum reaches the deepest valid ray");
+    }
+}
+
+#[test]
+fn the_same_seed_draws_the_same_rays() {
+    let views = [view(0, 2.0), view(1, 2.5), view(2, 1.5)];
+    let refs: Vec<&ObjectView> = views.iter().collect();
+    let draw = |seed| {
+        let cfg = RaySamplerConfig::OBJECT;
+        sample_training_rays(
+            &refs,
+            &[1, 2],
+            &Point3::origin(),
+            None,
+            &cfg,
+            &mut ChaCha8Rng::seed_from_u64(seed),
+        )
+    };
+    assert_eq!(draw(9), draw(9));
+    assert_ne!(draw(9), draw(10));
+}
