@@ -71,16 +71,10 @@ pub fn ray_box_interval(b: &OrientedBox, origin: &Point3<f32>, dir: &Vector3<f32
 }
 
 /// The depth interval in which a ray carves its object's box: the part of `[0, free_end]` (free
-/// space before the surface band) inside `b`, when it is longer than `min_length`.
-pub fn carving_interval(
-    b: &OrientedBox,
-    origin: &Point3<f32>,
-    dir: &Vector3<f32>,
-    free_end: f32,
-    min_length: f32,
-) -> Option<(f32, f32)> {
-    let (t_in, t_out) = ray_box_interval(b, origin, dir)?;
-    let (near, far) = (t_in.max(0.0), t_out.min(free_end));
+/// space before the surface band) of the ray's `crossing` of the box ([`ray_box_interval`]), when
+/// it is longer than `min_length`.
+pub fn carving_interval(crossing: (f32, f32), free_end: f32, min_length: f32) -> Option<(f32, f32)> {
+    let (near, far) = (crossing.0.max(0.0), crossing.1.min(free_end));
     (far - near > min_length).then_some((near, far))
 }
 
@@ -119,17 +113,18 @@ mod tests {
     #[test]
     fn the_carving_interval_stops_at_the_surface_band_and_starts_at_the_camera() {
         let b = unit_box_at(3.0, 0.0);
-        let dir = Vector3::x();
+        let crossing = ray_box_interval(&b, &Point3::origin(), &Vector3::x()).expect("crosses");
         // The background 5 m away: the whole crossing carves.
-        let (near, far) = carving_interval(&b, &Point3::origin(), &dir, 4.9, 0.01).unwrap();
+        let (near, far) = carving_interval(crossing, 4.9, 0.01).unwrap();
         assert!((near - 2.5).abs() < 1e-6 && (far - 3.5).abs() < 1e-6);
         // The surface 2.8 m away: only the part before its band.
-        let (_, far) = carving_interval(&b, &Point3::origin(), &dir, 2.7, 0.01).unwrap();
+        let (_, far) = carving_interval(crossing, 2.7, 0.01).unwrap();
         assert!((far - 2.7).abs() < 1e-6);
         // The surface where the ray enters the box: nothing to carve.
-        assert!(carving_interval(&b, &Point3::origin(), &dir, 2.4, 0.01).is_none());
+        assert!(carving_interval(crossing, 2.4, 0.01).is_none());
         // A camera inside the box carves from itself.
-        let (near, _) = carving_interval(&b, &Point3::new(3.0, 0.0, 0.0), &dir, 4.0, 0.01).unwrap();
+        let inside = ray_box_interval(&b, &Point3::new(3.0, 0.0, 0.0), &Vector3::x()).expect("inside");
+        let (near, _) = carving_interval(inside, 4.0, 0.01).unwrap();
         assert_eq!(near, 0.0);
     }
 

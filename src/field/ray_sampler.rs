@@ -22,7 +22,7 @@ use nalgebra::{Point3, Vector3};
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
-use super::free_space::{CarveCounts, carving_interval};
+use super::free_space::{CarveCounts, carving_interval, ray_box_interval};
 use super::samples::RaySamples;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::objects::keyframes::KeyframeWindow;
@@ -192,9 +192,10 @@ pub fn sample_training_rays(
         let state = view.states[i];
         let (camera, dir) = pixel_ray(view, u, row);
         let free_end = depth - cfg.surface_band_m;
-        let carve = object_box
+        let crossing = object_box.and_then(|b| ray_box_interval(b, &camera, &dir));
+        let carve = crossing
             .filter(|_| depth > 0.0 && cfg.carving_samples() > 0)
-            .and_then(|b| carving_interval(b, &camera, &dir, free_end, MIN_CARVE_M));
+            .and_then(|c| carving_interval(c, free_end, MIN_CARVE_M));
         depths_along_ray(depth, state, max_depth, carve, cfg, rng, &mut z);
 
         let origin = camera - field_origin.coords;
@@ -202,12 +203,10 @@ pub fn sample_training_rays(
             let p = origin + dir * zi;
             out.points.push([p.x, p.y, p.z]);
         }
-        if let Some(b) = object_box {
-            for &zi in &z {
-                if b.contains(&(camera + dir * zi), 0.0) {
-                    out.carve.inside += 1;
-                    out.carve.carving += u64::from(depth > 0.0 && zi < free_end);
-                }
+        if let Some((t_in, t_out)) = crossing {
+            for &zi in z.iter().filter(|&&zi| (t_in..=t_out).contains(&zi)) {
+                out.carve.inside += 1;
+                out.carve.carving += u64::from(depth > 0.0 && zi < free_end);
             }
         }
         out.z.extend_from_slice(&z);

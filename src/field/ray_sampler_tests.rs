@@ -40,6 +40,18 @@ fn view(frame: u64, depth: f32) -> ObjectView {
     }
 }
 
+/// One step's rays from `refs` without an object box.
+fn draw_unboxed(refs: &[&ObjectView], recent: &[usize], cfg: &RaySamplerConfig, seed: u64) -> RaySamples {
+    sample_training_rays(
+        refs,
+        recent,
+        &Point3::origin(),
+        None,
+        cfg,
+        &mut ChaCha8Rng::seed_from_u64(seed),
+    )
+}
+
 #[test]
 fn a_ray_budget_becomes_pixels_per_keyframe_rounded_up() {
     assert_eq!(RaySamplerConfig::OBJECT.with_rays_per_step(120).pixels_per_keyframe, 24);
@@ -140,14 +152,7 @@ fn box_samples_carve_the_part_of_each_ray_inside_the_box_before_the_surface() {
         "one ray in three carves: {:?}",
         vmap.carve
     );
-    let unboxed = sample_training_rays(
-        &refs,
-        &[0, 1],
-        &Point3::origin(),
-        None,
-        &RaySamplerConfig::OBJECT,
-        &mut ChaCha8Rng::seed_from_u64(5),
-    );
+    let unboxed = draw_unboxed(&refs, &[0, 1], &RaySamplerConfig::OBJECT, 5);
     let vmap_uncounted = RaySamples {
         carve: CarveCounts::default(),
         ..vmap
@@ -160,14 +165,7 @@ fn rays_whose_colour_is_read_come_first() {
     let views = [view(0, 2.0), view(1, 2.0)];
     let refs: Vec<&ObjectView> = views.iter().collect();
     let cfg = RaySamplerConfig::OBJECT;
-    let rays = sample_training_rays(
-        &refs,
-        &[0, 1],
-        &Point3::origin(),
-        None,
-        &cfg,
-        &mut ChaCha8Rng::seed_from_u64(6),
-    );
+    let rays = draw_unboxed(&refs, &[0, 1], &cfg, 6);
     let first_other = rays
         .states
         .iter()
@@ -188,14 +186,7 @@ fn invalid_depth_samples_up_to_the_deepest_valid_ray() {
         keyframes_per_step: 2,
         ..RaySamplerConfig::OBJECT
     };
-    let rays = sample_training_rays(
-        &refs,
-        &[0, 1],
-        &Point3::origin(),
-        None,
-        &cfg,
-        &mut ChaCha8Rng::seed_from_u64(4),
-    );
+    let rays = draw_unboxed(&refs, &[0, 1], &cfg, 4);
     let invalid: Vec<usize> = (0..rays.num_rays()).filter(|&r| rays.depth_m[r] == 0.0).collect();
     assert_eq!(invalid.len(), 24, "the second view's pixels have no depth");
     for r in invalid {
@@ -211,14 +202,7 @@ fn the_same_seed_draws_the_same_rays() {
     let refs: Vec<&ObjectView> = views.iter().collect();
     let draw = |seed| {
         let cfg = RaySamplerConfig::OBJECT;
-        sample_training_rays(
-            &refs,
-            &[1, 2],
-            &Point3::origin(),
-            None,
-            &cfg,
-            &mut ChaCha8Rng::seed_from_u64(seed),
-        )
+        draw_unboxed(&refs, &[1, 2], &cfg, seed)
     };
     assert_eq!(draw(9), draw(9));
     assert_ne!(draw(9), draw(10));
