@@ -26,6 +26,7 @@ fn main() -> Result<()> {
     };
     let spec = RegistrationTrialSpec::default();
     let (mut ok, mut seconds) = (0, 0.0);
+    let mut icp = catmap::registration::icp::IcpCounts::default();
     for seed in 0..trials {
         let design = Design::ALL[seed as usize % Design::ALL.len()];
         let trial = RegistrationTrial::draw(design, &spec, seed)?;
@@ -48,6 +49,7 @@ fn main() -> Result<()> {
             trimmed_normalised_chamfer(&moved, &index, cfg.keep_fraction)
         };
         let best_fine = fit.trace.refined[0].1;
+        icp = icp + fit.trace.icp;
         let pass = (rot < 5.0 && trans < 0.03) || cloud < 0.01;
         ok += usize::from(pass);
         println!(
@@ -64,6 +66,13 @@ fn main() -> Result<()> {
     println!(
         "registration trials: {ok}/{trials} within 5° / 3 cm (or aligned-cloud distance < 1 cm); {:.3} s per pair",
         seconds / trials as f64
+    );
+    println!(
+        "ICP: {} runs, {:.1} iterations per run, {} ({:.1} %) reached their iteration cap",
+        icp.runs,
+        icp.iterations as f64 / icp.runs.max(1) as f64,
+        icp.capped,
+        100.0 * icp.capped as f64 / icp.runs.max(1) as f64
     );
     Ok(())
 }

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::class_registration::RegisteredSubcategory;
 use super::field_plan::{PlannedField, plan_category_fields};
+use super::held_frames::{FrameHoldConfig, FramePolicy, FrameSymmetry, frame_change};
 use super::nocs::NocsFrame;
 use crate::error::Result;
 use crate::field::AdamWConfig;
@@ -65,6 +66,36 @@ pub struct CategoryFieldSet {
     pub fields_created: u32,
     /// Membership changes applied so far (seeds the fresh codes of the next one).
     pub remaps: u32,
+    /// Every member's place after the latest [`follow`](Self::follow).
+    pub places: BTreeMap<ObjectId, MemberPlace>,
+    /// Members whose frame a registration replaced while they stayed in their field (each got a
+    /// fresh code), so far.
+    pub frames_replaced: u32,
+    /// Fields a membership change ended, in the order it happened.
+    pub retired: Vec<RetiredField>,
+}
+
+/// A category field a membership change ended.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RetiredField {
+    /// Its creation number.
+    pub id: u32,
+    /// Its members then, in code order.
+    pub members: Vec<ObjectId>,
+    /// The membership change that ended it (1 = the first).
+    pub remap: u32,
+    /// Why.
+    pub cause: Retirement,
+}
+
+/// Why a category field ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Retirement {
+    /// No subcategory of the new membership continued it.
+    Dropped,
+    /// Its codes could not be remapped; a fresh field took its members.
+    Restarted,
 }
 
 impl CategoryFieldSet {
@@ -78,32 +109,49 @@ impl CategoryFieldSet {
             carve: Vec::new(),
             fields_created: 0,
             remaps: 0,
+            places: BTreeMap::new(),
+            frames_replaced: 0,
+            retired: Vec::new(),
         }
     }
 
     /// Brings the fields in step with `subcategories` (every class's, in any order; fields are
     /// ordered by representative) and returns every member's place. Fields are created from
-    /// `seed` with `code_dim`-dimensional codes; nothing changes when the membership did not.
+    /// `seed` with `code_dim`-dimensional codes; nothing changes when the membership did not. A
+    /// member whose frame moved beyond `frames`' tolerance gets a fresh code (`held_frames`).
     pub fn follow<'a>(
         &mut self,
         subcategories: impl IntoIterator<Item = &'a RegisteredSubcategory>,
         seed: u64,
         code_dim: usize,
+        frames: &FrameHoldConfig,
     ) -> BTreeMap<ObjectId, MemberPlace> {
         let mut groups: Vec<&RegisteredSubcategory> =
             subcategories.into_iter().filter(|g| g.members.len() > 1).collect();
         groups.sort_by_key(|g| g.representative);
         let wanted: Vec<Vec<ObjectId>> = groups.iter().map(|g| g.members.keys().copied().collect()).collect();
-        if wanted != self.members {
-            self.apply_plan(&plan_category_fields(&self.members, &wanted), seed, code_dim);
-            self.members = wanted;
-            self.losses = vec![f32::NAN; self.members.len()];
-            self.carve = vec![CarveCounts::default(); self.members.len()];
-        }
         let nocs: BTreeMap<ObjectId, NocsFrame> = groups
             .iter()
             .flat_map(|g| g.members.iter().map(|(id, m)| (*id, m.nocs)))
             .collect();
+        let moved = self.moved_frames(&nocs, frames);
+        if wanted != self.members || !moved.is_empty() {
+            let mut plan = plan_category_fields(&self.members, &wanted);
+            for field in &mut plan {
+                for (id, code) in field.members.iter().zip(&mut field.codes) {
+                    if moved.contains(id) && code.take().is_some() {
+                        self.frames_replaced += 1;
+                        tracing::info!(object = %id, "member's frame replaced: fresh code");
+                    }
+                }
+            }
+            self.apply_plan(&plan, seed, code_dim);
+            if wanted != self.members {
+                self.members = wanted;
+                self.losses = vec![f32::NAN; self.members.len()];
+                self.carve = vec![CarveCounts::default(); self.members.len()];
+            }
+        }
         let mut places = BTreeMap::new();
         for (field, members) in self.members.iter().enumerate() {
             for (member, id) in members.iter().enumerate() {
@@ -112,7 +160,24 @@ impl CategoryFieldSet {
                 }
             }
         }
+        self.places.clone_from(&places);
         places
+    }
+
+    /// The members whose frame in `nocs` lies beyond `cfg`'s tolerance of the one they train in
+    /// now (none when frames are rebuilt at every registration).
+    fn moved_frames(&self, nocs: &BTreeMap<ObjectId, NocsFrame>, cfg: &FrameHoldConfig) -> Vec<ObjectId> {
+        if cfg.policy == FramePolicy::Rebuild {
+            return Vec::new();
+        }
+        nocs.iter()
+            .filter(|(id, frame)| {
+                self.places
+                    .get(id)
+                    .is_some_and(|p| !frame_change(&p.nocs, frame, FrameSymmetry::None).within(cfg))
+            })
+            .map(|(id, _)| *id)
+            .collect()
     }
 
     /// Rebuilds the batch as `plan` says: continued fields keep their network and remap their
@@ -128,12 +193,13 @@ impl CategoryFieldSet {
         for planned in plan {
             let continued = planned
                 .continues
-                .and_then(|i| Some((old.get_mut(i).and_then(Option::take)?, *old_ids.get(i)?)));
+                .and_then(|i| Some((old.get_mut(i).and_then(Option::take)?, *old_ids.get(i)?, i)));
             let (field, id) = match continued {
-                Some((mut field, id)) => match field.remap_members(&planned.codes, &mut codes_rng) {
+                Some((mut field, id, i)) => match field.remap_members(&planned.codes, &mut codes_rng) {
                     Ok(()) => (field, id),
                     Err(e) => {
                         tracing::warn!(error = %e, "category field restarted");
+                        self.retire(id, i, Retirement::Restarted);
                         self.new_field(seed, code_dim, planned.members.len())
                     }
                 },
@@ -148,6 +214,23 @@ impl CategoryFieldSet {
                 "category field"
             );
         }
+        for (i, field) in old.iter().enumerate() {
+            if let (Some(_), Some(&id)) = (field, old_ids.get(i)) {
+                self.retire(id, i, Retirement::Dropped);
+            }
+        }
+    }
+
+    /// Records that field `id` (index `index` before this membership change) ended.
+    fn retire(&mut self, id: u32, index: usize, cause: Retirement) {
+        let members = self.members.get(index).cloned().unwrap_or_default();
+        tracing::info!(field = id, ?members, ?cause, "category field ended");
+        self.retired.push(RetiredField {
+            id,
+            members,
+            remap: self.remaps,
+            cause,
+        });
     }
 
     /// A fresh category field (the next one created) with `members` members, and its number.
@@ -267,7 +350,7 @@ mod tests {
             subcategory(1, &[1, 2, 3]),
             subcategory(5, &[5]),
         ];
-        let places = set.follow(&groups, 3, 8);
+        let places = set.follow(&groups, 3, 8, &FrameHoldConfig::default());
         assert_eq!(
             set.members,
             vec![
@@ -291,15 +374,77 @@ mod tests {
     #[test]
     fn an_unchanged_membership_keeps_the_fields_and_a_split_starts_one_more() {
         let mut set = CategoryFieldSet::new(AdamWConfig::default());
-        set.follow(&[subcategory(1, &[1, 2, 3, 4])], 3, 8);
+        set.follow(&[subcategory(1, &[1, 2, 3, 4])], 3, 8, &FrameHoldConfig::default());
         set.losses[0] = 0.5;
         let before = set.batch.field(0).cloned();
-        set.follow(&[subcategory(1, &[1, 2, 3, 4])], 3, 8);
+        set.follow(&[subcategory(1, &[1, 2, 3, 4])], 3, 8, &FrameHoldConfig::default());
         assert_eq!((set.remaps, set.losses[0]), (1, 0.5), "nothing to remap");
         assert_eq!(set.batch.field(0).cloned(), before);
-        let places = set.follow(&[subcategory(1, &[1, 2, 3]), subcategory(4, &[4, 9])], 3, 8);
+        let places = set.follow(
+            &[subcategory(1, &[1, 2, 3]), subcategory(4, &[4, 9])],
+            3,
+            8,
+            &FrameHoldConfig::default(),
+        );
         assert_eq!(set.ids, vec![0, 1], "the larger part continues field 0");
         assert_eq!((set.remaps, set.fields_created), (2, 2));
         assert_eq!(places[&ObjectId(9)].field, 1);
+    }
+
+    #[test]
+    fn a_member_whose_frame_is_replaced_gets_a_fresh_code_and_the_others_keep_theirs() {
+        let mut set = CategoryFieldSet::new(AdamWConfig::default());
+        set.follow(&[subcategory(1, &[1, 2, 3])], 3, 8, &FrameHoldConfig::default());
+        let codes = |set: &CategoryFieldSet| -> Vec<Vec<f32>> {
+            let field = set.batch.field(0).expect("one field");
+            (0..3).map(|j| field.shape_code(j).expect("member").to_vec()).collect()
+        };
+        let before = codes(&set);
+        // Object 2's frame is moved 0.5 m by a registration (its scale is 1); the others' boxes
+        // only grew.
+        let mut moved = subcategory(1, &[1, 2, 3]);
+        for (id, m) in &mut moved.members {
+            if *id == ObjectId(2) {
+                m.nocs = NocsFrame::of_box(Isometry3::translation(0.5, 0.0, 0.0), Vector3::new(1.0, 2.0, 1.0));
+            } else {
+                m.nocs.extents *= 1.1;
+            }
+        }
+        let places = set.follow(&[moved], 3, 8, &FrameHoldConfig::default());
+        let after = codes(&set);
+        assert_eq!(
+            (after[0] == before[0], after[2] == before[2]),
+            (true, true),
+            "kept codes"
+        );
+        assert_ne!(after[1], before[1], "the moved member starts afresh");
+        assert_eq!(set.frames_replaced, 1);
+        assert_eq!(set.ids, vec![0], "the field continues");
+        assert!(
+            (places[&ObjectId(2)].nocs.world_from_nocs.isometry.translation.x - 0.5).abs() < 1e-6,
+            "it trains in its new frame"
+        );
+    }
+
+    #[test]
+    fn a_field_no_subcategory_continues_is_recorded_as_dropped() {
+        let mut set = CategoryFieldSet::new(AdamWConfig::default());
+        set.follow(
+            &[subcategory(1, &[1, 2]), subcategory(5, &[5, 6])],
+            3,
+            8,
+            &FrameHoldConfig::default(),
+        );
+        set.follow(&[subcategory(1, &[1, 2, 5, 6])], 3, 8, &FrameHoldConfig::default());
+        assert_eq!(
+            set.retired,
+            vec![RetiredField {
+                id: 1,
+                members: vec![ObjectId(5), ObjectId(6)],
+                remap: 2,
+                cause: Retirement::Dropped,
+            }]
+        );
+        assert_eq!(set.ids, vec![0]);
     }
 }

@@ -31,6 +31,17 @@ impl NocsFrame {
         }
     }
 
+    /// The same frame (pose and scale) with its box grown, about its centre, until it holds
+    /// every point of `cloud` (world) and every edge is at least `min_extent` long; the box never
+    /// shrinks. NOCS coordinates of the grown part may exceed the unit cube.
+    pub fn covering(&self, cloud: &[Point3<f32>], min_extent: f32) -> Result<Self> {
+        let cover = symmetric_cover(&self.world_from_nocs.isometry, cloud)?;
+        Ok(Self {
+            world_from_nocs: self.world_from_nocs,
+            extents: self.extents.sup(&cover).map(|e| e.max(min_extent)),
+        })
+    }
+
     /// The box as an [`OrientedBox`].
     pub fn oriented_box(&self) -> OrientedBox {
         OrientedBox {
@@ -59,19 +70,25 @@ pub fn aligned_member_frame(
         ));
     }
     let rep_box = representative.world_from_nocs.isometry;
-    let box_from_object = rep_box.inverse() * template_from_object;
+    // The member's box: the representative's box carried back to the member's pose.
+    let world_from_box = template_from_object.inverse() * rep_box;
+    let extents = symmetric_cover(&world_from_box, cloud)?.map(|e| e.max(min_extent));
+    Ok(NocsFrame::of_box(world_from_box, extents))
+}
+
+/// Edge lengths of the smallest box with pose `world_from_box` that holds every point of `cloud`
+/// and is symmetric about its centre: `2·max |p|` per axis in the box frame.
+fn symmetric_cover(world_from_box: &Isometry3<f32>, cloud: &[Point3<f32>]) -> Result<Vector3<f32>> {
+    let box_from_world = world_from_box.inverse();
     let mut half = Vector3::repeat(0.0f32);
     for p in cloud {
-        let q = box_from_object * p;
+        let q = box_from_world * p;
         if !q.coords.iter().all(|c| c.is_finite()) {
             return Err(CatmapError::Degenerate("non-finite point in an aligned cloud".into()));
         }
         half = half.sup(&q.coords.abs());
     }
-    let extents = (half * 2.0).map(|e| e.max(min_extent));
-    // The member's box: the representative's box carried back to the member's pose.
-    let world_from_box = template_from_object.inverse() * rep_box;
-    Ok(NocsFrame::of_box(world_from_box, extents))
+    Ok(half * 2.0)
 }
 
 #[cfg(test)]

@@ -42,6 +42,9 @@ pub struct RegistrationConfig {
     pub icp_max_correspondence_m: f32,
     /// ICP: most iterations.
     pub icp_max_iterations: usize,
+    /// Every ICP run (search, refinement and plain) stops at a step that turns by less than this
+    /// many radians and moves by less than this many metres.
+    pub icp_step_tolerance: f64,
     /// Seed one extra candidate with the front end + TEASER++ back end estimate (computed once:
     /// with all-to-all pairs it does not depend on the initial rotation).
     pub robust_start: bool,
@@ -95,6 +98,7 @@ impl Default for RegistrationConfig {
             icp_voxel_m: 0.02,
             icp_max_correspondence_m: 0.01,
             icp_max_iterations: 100,
+            icp_step_tolerance: 1e-5,
             robust_start: false,
             search_voxel_m: 0.05,
             search_gates_m: vec![0.3, 0.1],

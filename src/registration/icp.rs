@@ -5,7 +5,11 @@
 //! transform T_k; pairs with |T_k p_i − q_i| ≤ d_max are kept, of those only the fraction ρ
 //! with the smallest distances (ρ = 1: all), and
 //! T_{k+1} = argmin_T Σ |q_i − T p_i|² (closed form, [`weighted_rigid`]). Stops after
-//! `max_iterations`, when fewer than 3 pairs remain, or when the transform stops changing.
+//! `max_iterations`, when fewer than 3 pairs remain, or when a step turns by less than
+//! `step_tolerance` radians and moves by less than `step_tolerance` metres. The points are
+//! `f32` (a resolution of about 1e-7 m per metre of distance from the origin), so a tolerance
+//! much below 1e-6 is met only when the pairs repeat exactly; pairs that alternate between two
+//! sets go on to the cap. 1e-5 (10 µm) is far below the clouds' voxels (centimetres).
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
 
@@ -21,6 +25,54 @@ pub struct IcpParams {
     pub max_iterations: usize,
     /// Fraction ρ ∈ (0, 1] of the gated pairs kept, the closest first (1 = plain ICP).
     pub keep_fraction: f32,
+    /// A step smaller than this (radians of turn and metres of move) ends the run.
+    pub step_tolerance: f64,
+}
+
+/// Why an ICP run stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum IcpStop {
+    /// A step below the tolerance.
+    #[default]
+    Converged,
+    /// Fewer than 3 pairs within the gate.
+    TooFewPairs,
+    /// `max_iterations` reached.
+    IterationCap,
+}
+
+/// ICP runs and their iterations, summed (a registration's diagnostics).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct IcpCounts {
+    /// Runs.
+    pub runs: usize,
+    /// Iterations over all runs.
+    pub iterations: usize,
+    /// Runs that reached their iteration cap.
+    pub capped: usize,
+}
+
+impl IcpCounts {
+    /// The counts of one run.
+    pub fn of(result: &IcpResult) -> Self {
+        Self {
+            runs: 1,
+            iterations: result.iterations,
+            capped: usize::from(result.stop == IcpStop::IterationCap),
+        }
+    }
+}
+
+impl std::ops::Add for IcpCounts {
+    type Output = Self;
+
+    fn add(self, other: Self) -> Self {
+        Self {
+            runs: self.runs + other.runs,
+            iterations: self.iterations + other.iterations,
+            capped: self.capped + other.capped,
+        }
+    }
 }
 
 /// Outcome of [`icp_point_to_point`].
@@ -32,6 +84,8 @@ pub struct IcpResult {
     pub iterations: usize,
     /// Correspondences within the gate in the last iteration.
     pub correspondences: usize,
+    /// Why it stopped.
+    pub stop: IcpStop,
 }
 
 /// Refines `initial` (template_from_source) by point-to-point ICP of `source` against the
@@ -49,6 +103,7 @@ pub fn icp_point_to_point(
         template_from_source: initial,
         iterations: 0,
         correspondences: 0,
+        stop: IcpStop::IterationCap,
     };
     for iteration in 0..params.max_iterations {
         let moved: Vec<Point3<f32>> = source.iter().map(|p| (current * p.cast::<f64>()).cast()).collect();
@@ -74,6 +129,7 @@ pub fn icp_point_to_point(
             .collect();
         result.correspondences = a.len();
         if a.len() < 3 {
+            result.stop = IcpStop::TooFewPairs;
             break;
         }
         let (rotation, translation) = weighted_rigid(&a, &b, &vec![1.0; a.len()]);
@@ -84,7 +140,8 @@ pub fn icp_point_to_point(
         let step = next * current.inverse();
         current = next;
         result.iterations = iteration + 1;
-        if step.rotation.angle() < 1e-7 && step.translation.vector.norm() < 1e-7 {
+        if step.rotation.angle() < params.step_tolerance && step.translation.vector.norm() < params.step_tolerance {
+            result.stop = IcpStop::Converged;
             break;
         }
     }
@@ -129,6 +186,7 @@ mod tests {
             max_correspondence_m: 0.03,
             max_iterations: 100,
             keep_fraction: 1.0,
+            step_tolerance: 1e-5,
         };
         let fit = icp_point_to_point(&source, &template, &index, Isometry3::identity(), &params);
         let error = fit.template_from_source * truth.inverse();
@@ -143,6 +201,7 @@ mod tests {
             error.rotation.angle()
         );
         assert_eq!(fit.correspondences, 1000, "every point matched at the end");
+        assert_eq!(fit.stop, IcpStop::Converged, "within {} iterations", fit.iterations);
     }
 
     #[test]
@@ -169,6 +228,7 @@ mod tests {
                 max_correspondence_m: 0.5,
                 max_iterations: 100,
                 keep_fraction,
+                step_tolerance: 1e-5,
             };
             let fit = icp_point_to_point(&source, &template, &index, Isometry3::identity(), &params);
             (fit.template_from_source * truth.inverse()).translation.vector.norm()

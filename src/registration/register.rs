@@ -31,7 +31,7 @@ use super::RegistrationConfig;
 use super::chamfer::{normalised_one_way_chamfer, trimmed_normalised_chamfer};
 use super::cloud::{check_cloud, voxel_centroids};
 use super::cube_rotations::cube_rotations;
-use super::icp::{IcpParams, icp_point_to_point};
+use super::icp::{IcpCounts, IcpParams, icp_point_to_point};
 use super::robust_start::{RobustTrace, robust_start};
 use crate::error::Result;
 use crate::geometry::nearest::PointIndex;
@@ -77,6 +77,8 @@ pub struct RegistrationTrace {
     pub coarse_scores: Vec<f32>,
     /// (start index, trimmed fine score) of every refined candidate, best first.
     pub refined: Vec<(usize, f32)>,
+    /// Every ICP run of the search: how many, their iterations, how many reached their cap.
+    pub icp: IcpCounts,
 }
 
 /// Registers `source` (a partial, noisy object cloud) to `template` (the representative's
@@ -104,15 +106,20 @@ pub fn register_to_representative<R: Rng + ?Sized>(
     let search_source = stride_subset(&coarse.source, cfg.search_points);
     let coarse_fits = coarse_search(&coarse, &search_source, &starts, cfg);
     let chosen = distinct_best(&coarse_fits, cfg.refined_candidates.max(1));
-    let mut refined: Vec<(usize, Isometry3<f64>, f32)> = chosen
+    let mut refined: Vec<(usize, Isometry3<f64>, f32, IcpCounts)> = chosen
         .par_iter()
         .map(|&k| {
-            let pose = fine.refine_fully(coarse_fits[k].0, cfg);
-            (k, pose, fine.score(&pose, 1.0))
+            let (pose, icp) = fine.refine_fully(coarse_fits[k].0, cfg);
+            (k, pose, fine.score(&pose, 1.0), icp)
         })
         .collect();
     refined.sort_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)));
-    let (start_index, pose, _) = refined[0];
+    let (start_index, pose, ..) = refined[0];
+    let icp = coarse_fits
+        .iter()
+        .map(|f| f.2)
+        .chain(refined.iter().map(|r| r.3))
+        .fold(IcpCounts::default(), |a, b| a + b);
     finished(
         source,
         template,
@@ -125,30 +132,36 @@ pub fn register_to_representative<R: Rng + ?Sized>(
             robust: robust.map(|r| r.map(|(_, t)| t).map_err(|e| e.to_string())),
             coarse_scores: coarse_fits.iter().map(|f| f.1).collect(),
             refined: refined.iter().map(|r| (r.0, r.2)).collect(),
+            icp,
         },
     )
 }
 
 /// Step 2 of the module doc: every start runs the coarse gates on `search_source` and is scored
-/// (trimmed) on the whole coarse source.
+/// (trimmed) on the whole coarse source; with each start's ICP counts.
 fn coarse_search(
     coarse: &Level,
     search_source: &[Point3<f32>],
     starts: &[Isometry3<f64>],
     cfg: &RegistrationConfig,
-) -> Vec<(Isometry3<f64>, f32)> {
+) -> Vec<(Isometry3<f64>, f32, IcpCounts)> {
     let stage = |gate: f32| IcpParams {
         max_correspondence_m: gate,
         max_iterations: cfg.search_iterations,
         keep_fraction: cfg.keep_fraction,
+        step_tolerance: cfg.icp_step_tolerance,
     };
     starts
         .par_iter()
         .map(|start| {
-            let pose = cfg.search_gates_m.iter().fold(*start, |pose, &gate| {
-                coarse.refine_points(search_source, pose, &stage(gate))
-            });
-            (pose, coarse.score(&pose, cfg.keep_fraction))
+            let (pose, icp) = cfg
+                .search_gates_m
+                .iter()
+                .fold((*start, IcpCounts::default()), |(pose, icp), &gate| {
+                    let (pose, run) = coarse.refine_points(search_source, pose, &stage(gate));
+                    (pose, icp + run)
+                });
+            (pose, coarse.score(&pose, cfg.keep_fraction), icp)
         })
         .collect()
 }
@@ -190,11 +203,12 @@ pub fn refine_registration(
     check_cloud(source, "source", 3)?;
     check_cloud(template, "template", 3)?;
     let fine = Level::new(source, template, cfg.icp_voxel_m)?;
-    let pose = fine.refine_fully(template_from_source.cast(), cfg);
+    let (pose, icp) = fine.refine_fully(template_from_source.cast(), cfg);
     let trace = RegistrationTrace {
         fine_points: (fine.source.len(), fine.template.len()),
         starts: 1,
         refined: vec![(0, fine.score(&pose, 1.0))],
+        icp,
         ..RegistrationTrace::default()
     };
     finished(source, template, &pose, 0, trace)
@@ -217,34 +231,47 @@ impl Level {
         })
     }
 
-    fn refine(&self, pose: Isometry3<f64>, params: &IcpParams) -> Isometry3<f64> {
+    fn refine(&self, pose: Isometry3<f64>, params: &IcpParams) -> (Isometry3<f64>, IcpCounts) {
         self.refine_points(&self.source, pose, params)
     }
 
-    fn refine_points(&self, source: &[Point3<f32>], pose: Isometry3<f64>, params: &IcpParams) -> Isometry3<f64> {
-        icp_point_to_point(source, &self.template, &self.index, pose, params).template_from_source
+    fn refine_points(
+        &self,
+        source: &[Point3<f32>],
+        pose: Isometry3<f64>,
+        params: &IcpParams,
+    ) -> (Isometry3<f64>, IcpCounts) {
+        let fit = icp_point_to_point(source, &self.template, &self.index, pose, params);
+        (fit.template_from_source, IcpCounts::of(&fit))
     }
 
     /// Step 3 of the module doc from `start`: trimmed ICP at the `refine_gates_m`, then plain ICP.
-    fn refine_fully(&self, start: Isometry3<f64>, cfg: &RegistrationConfig) -> Isometry3<f64> {
-        let pose = cfg.refine_gates_m.iter().fold(start, |pose, &gate| {
-            self.refine(
-                pose,
-                &IcpParams {
-                    max_correspondence_m: gate,
-                    max_iterations: cfg.refine_iterations,
-                    keep_fraction: cfg.keep_fraction,
-                },
-            )
-        });
-        self.refine(
+    fn refine_fully(&self, start: Isometry3<f64>, cfg: &RegistrationConfig) -> (Isometry3<f64>, IcpCounts) {
+        let (pose, icp) = cfg
+            .refine_gates_m
+            .iter()
+            .fold((start, IcpCounts::default()), |(pose, icp), &gate| {
+                let (pose, run) = self.refine(
+                    pose,
+                    &IcpParams {
+                        max_correspondence_m: gate,
+                        max_iterations: cfg.refine_iterations,
+                        keep_fraction: cfg.keep_fraction,
+                        step_tolerance: cfg.icp_step_tolerance,
+                    },
+                );
+                (pose, icp + run)
+            });
+        let (pose, run) = self.refine(
             pose,
             &IcpParams {
                 max_correspondence_m: cfg.icp_max_correspondence_m,
                 max_iterations: cfg.icp_max_iterations,
                 keep_fraction: 1.0,
+                step_tolerance: cfg.icp_step_tolerance,
             },
-        )
+        );
+        (pose, icp + run)
     }
 
     fn score(&self, pose: &Isometry3<f64>, keep_fraction: f32) -> f32 {
@@ -337,7 +364,7 @@ fn shift_translation(
 
 /// Indices of up to `count` fits with the smallest scores whose poses differ pairwise by more
 /// than 5° or 5 cm (ties: lower index first).
-fn distinct_best(fits: &[(Isometry3<f64>, f32)], count: usize) -> Vec<usize> {
+fn distinct_best(fits: &[(Isometry3<f64>, f32, IcpCounts)], count: usize) -> Vec<usize> {
     let mut order: Vec<usize> = (0..fits.len()).collect();
     order.sort_by(|&a, &b| fits[a].1.total_cmp(&fits[b].1).then(a.cmp(&b)));
     let mut chosen: Vec<usize> = Vec::new();

@@ -95,6 +95,10 @@ pub(crate) struct MapperState {
     category_remaps: u32,
     /// Each category field's creation number (its key in the step scheduler).
     category_ids: Vec<u32>,
+    /// Every category member's place (its field, code and frame) after the latest membership update.
+    category_places: BTreeMap<ObjectId, catmap::categories::field_set::MemberPlace>,
+    category_frames_replaced: u32,
+    category_retired: Vec<catmap::categories::field_set::RetiredField>,
     /// What the caller stored beside the mapper (e.g. the command line), as JSON.
     extra: String,
 }
@@ -181,6 +185,9 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
         category_fields_created: category.fields_created,
         category_remaps: category.remaps,
         category_ids: category.ids.clone(),
+        category_places: category.places.clone(),
+        category_frames_replaced: category.frames_replaced,
+        category_retired: category.retired.clone(),
         extra,
     };
     Ok((state, tensors))
@@ -354,6 +361,9 @@ pub(crate) fn restore(
     category.fields_created = state.category_fields_created;
     category.remaps = state.category_remaps;
     category.ids = state.category_ids;
+    category.places = state.category_places;
+    category.frames_replaced = state.category_frames_replaced;
+    category.retired = state.category_retired;
     if category.ids.len() != category.members.len() {
         return Err(bad(format!(
             "{} category fields but {} creation numbers",

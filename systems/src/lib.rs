@@ -16,6 +16,7 @@ mod checkpoint;
 pub mod mapper;
 pub mod snapshot;
 pub mod summary;
+pub mod training_report;
 
 // Rerun: the entity paths logged to, and recording files.
 pub mod rerun_paths;

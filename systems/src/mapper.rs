@@ -227,6 +227,10 @@ impl Mapper {
             &self.world.resource::<TrainingSchedule>().scheduler,
             self.world.resource::<PhaseProgress>(),
             &carving,
+            crate::summary::CategoryHistory {
+                retired: &categories.retired,
+                frames_replaced: categories.frames_replaced,
+            },
         )
     }
 

@@ -7,7 +7,8 @@
 //! world/camera/image             pinhole; rgb, depth, instances below it
 //! world/background/{mesh,loss,steps}
 //! world/objects/{id}/{points,box,aligned_box,reliability,mesh,loss,steps,shape_code_norm,texture_code_norm}
-//! world/categories/{k}/loss      category field k's loss
+//! world/categories/{n}/loss      loss of the category field created n-th (its number holds
+//!                                while the field continues under a new membership)
 //! ```
 
 use catmap::ObjectId;
@@ -86,14 +87,14 @@ pub fn of(owner: Option<ObjectId>, entity: OwnerEntity) -> String {
     format!("{root}/{}", entity.name())
 }
 
-/// The loss of category field `k`.
-pub fn category_loss(k: usize) -> String {
-    format!("world/categories/{k}/loss")
+/// The loss of category field number `n` (its creation number, not its place in the batch).
+pub fn category_loss(n: u32) -> String {
+    format!("world/categories/{n}/loss")
 }
 
-/// The carving share of category field `k`'s samples (see [`OwnerEntity::CarvingShare`]).
-pub fn category_carving_share(k: usize) -> String {
-    format!("world/categories/{k}/carving_share")
+/// The carving share of category field number `n`'s samples (see [`OwnerEntity::CarvingShare`]).
+pub fn category_carving_share(n: u32) -> String {
+    format!("world/categories/{n}/carving_share")
 }
 
 #[cfg(test)]

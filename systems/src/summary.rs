@@ -12,6 +12,7 @@ use catmap::{ClassId, ObjectId};
 use serde::{Deserialize, Serialize};
 
 use crate::snapshot::MapSnapshot;
+pub use crate::training_report::{CategoryHistory, FieldTraining, TrainingReport};
 
 /// One row per object.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -75,72 +76,6 @@ pub struct RunSummary {
     /// The whole configuration the run used (defaults, config file and command line resolved),
     /// the same tree as `catmap config` prints.
     pub config: Option<catmap::MapperConfig>,
-}
-
-/// How the fields trained.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct TrainingReport {
-    /// `fast` or `paper`.
-    pub schedule: catmap::training::SchedulePolicy,
-    /// Per field (`object 3`, `category 0`): steps taken, its final state, and the step count at
-    /// which it last converged.
-    pub fields: BTreeMap<String, FieldTraining>,
-    /// Why the training right after the stream ended.
-    pub after_stream_end: Option<catmap::training::PhaseEnd>,
-    /// Why the category phase ended (when there was one).
-    pub category_end: Option<catmap::training::PhaseEnd>,
-}
-
-/// One field's training.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FieldTraining {
-    /// Steps it took.
-    pub steps: u64,
-    /// Its state at the end.
-    pub state: catmap::training::FieldState,
-    /// Steps it had taken when it last converged.
-    pub converged_at: Option<u64>,
-    /// Of its samples inside the region its object is meshed in, the share that carved free
-    /// space (`fields.object_rays.box_free_samples`); `None` when it sampled none there. A
-    /// category field's counts start again when its membership changes.
-    #[serde(default)]
-    pub carving_share: Option<f64>,
-}
-
-impl TrainingReport {
-    /// The report of a mapper's schedule and phases.
-    pub fn new(
-        schedule: catmap::training::SchedulePolicy,
-        scheduler: &catmap::training::StepScheduler,
-        phases: &crate::resources::PhaseProgress,
-        carving: &std::collections::BTreeMap<catmap::training::FieldKey, catmap::field::free_space::CarveCounts>,
-    ) -> Self {
-        use catmap::training::FieldKey;
-        let fields = scheduler
-            .progress()
-            .iter()
-            .map(|(key, p)| {
-                let name = match key {
-                    FieldKey::Object(id) => format!("object {id}"),
-                    FieldKey::Category(k) => format!("category {k}"),
-                    FieldKey::Background => "background".to_owned(),
-                };
-                let row = FieldTraining {
-                    steps: p.steps,
-                    state: p.state,
-                    converged_at: p.converged_at,
-                    carving_share: carving.get(key).filter(|c| c.inside > 0).map(|c| c.share()),
-                };
-                (name, row)
-            })
-            .collect();
-        Self {
-            schedule,
-            fields,
-            after_stream_end: phases.after_stream_end,
-            category_end: phases.category_end,
-        }
-    }
 }
 
 /// What became of one step after the map was made.
@@ -270,27 +205,7 @@ impl RunSummary {
         }
         let _ = writeln!(out, "| **all** | {} |", self.objects.len());
         if let Some(training) = &self.training {
-            let ended = |end: Option<catmap::training::PhaseEnd>| match end {
-                Some(catmap::training::PhaseEnd::Converged) => "every field converged",
-                Some(catmap::training::PhaseEnd::StepCap) => "step cap reached",
-                None => "–",
-            };
-            let _ = writeln!(
-                out,
-                "\ntraining ({:?} schedule): after the stream, {}",
-                training.schedule,
-                ended(training.after_stream_end)
-            );
-            if training.category_end.is_some() {
-                let _ = writeln!(out, "category phase: {}", ended(training.category_end));
-            }
-            let _ = writeln!(out, "\n| field | steps | state | carving [%] |\n|---|---:|---|---:|");
-            for (name, field) in &training.fields {
-                let carving = field
-                    .carving_share
-                    .map_or_else(|| "–".to_owned(), |s| format!("{:.1}", 100.0 * s));
-                let _ = writeln!(out, "| {name} | {} | {:?} | {carving} |", field.steps, field.state);
-            }
+            training.write_table(&mut out);
         }
         let _ = writeln!(out, "\n| stage | seconds |\n|---|---:|");
         for (stage, secs) in &self.stage_seconds {

@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::categories::held_frames::FrameHoldConfig;
 use crate::categories::subcategories::SubcategoryRule;
 use crate::categories::uncertainty::{RepresentativeChoice, UncertaintyConfig};
 use crate::registration::RegistrationConfig;
@@ -40,6 +41,9 @@ pub struct CategoryConfig {
     /// A member's uncertainty sphere is evaluated again only when its cloud or its field's steps
     /// have grown by more than this fraction since it was last evaluated (0.25 = 25 %).
     pub uncertainty_refresh_growth: f32,
+    /// Whether members keep their normalised frames across re-registrations, and how far a
+    /// registration may move one before it is replaced (`categories::held_frames`).
+    pub frames: FrameHoldConfig,
 }
 
 /// Where a re-registration of a class starts a pair (member, representative) it registered before.
@@ -79,6 +83,7 @@ impl Default for CategoryConfig {
             registration_start: RegistrationStart::Search,
             warm_start_tolerance: 0.1,
             uncertainty_refresh_growth: 0.25,
+            frames: FrameHoldConfig::default(),
         }
     }
 }

@@ -1,5 +1,5 @@
 //! Rerun logging of the category phase: each category field's loss under
-//! `world/categories/{k}/loss` and carving share under `…/carving_share`, and each member's code norms under
+//! `world/categories/{n}/loss` (n: its creation number) and carving share under `…/carving_share`, and each member's code norms under
 //! `world/objects/{id}/shape_code_norm` and `…/texture_code_norm`, on the `category_step` timeline.
 
 use bevy_ecs::prelude::*;
@@ -16,15 +16,15 @@ pub fn log_category_training(rerun: Res<Rerun>, fields: Res<CategoryFields>, mem
         return;
     }
     rerun.0.set_time_sequence(CATEGORY_TIMELINE, fields.steps_done as i64);
-    for (k, loss) in fields.losses.iter().enumerate() {
-        let path = paths::category_loss(k);
+    for (n, loss) in fields.ids.iter().zip(&fields.losses) {
+        let path = paths::category_loss(*n);
         warn_on_error(
             rerun.0.log(path.as_str(), &rerun::Scalars::single(f64::from(*loss))),
             &path,
         );
     }
-    for (k, counts) in fields.carve.iter().enumerate().filter(|(_, c)| c.inside > 0) {
-        let path = paths::category_carving_share(k);
+    for (n, counts) in fields.ids.iter().zip(&fields.carve).filter(|(_, c)| c.inside > 0) {
+        let path = paths::category_carving_share(*n);
         warn_on_error(
             rerun.0.log(path.as_str(), &rerun::Scalars::single(counts.share())),
             &path,
