@@ -104,6 +104,13 @@ impl Design {
     pub fn mesh(self) -> TriangleMesh {
         TriangleMesh::merged(&self.parts())
     }
+
+    /// The surface of the design as ground truth: the parts without what lies inside another part
+    /// ([`exterior_surface`](super::exterior::exterior_surface), pieces of at most 1 cm where
+    /// parts meet).
+    pub fn surface(self) -> TriangleMesh {
+        super::exterior::exterior_surface(&self.parts(), 0.01)
+    }
 }
 
 /// Paints `mesh` one colour.

@@ -16,6 +16,7 @@
 
 pub mod bvh;
 pub mod description;
+pub mod exterior;
 pub mod furniture;
 pub mod geometry;
 pub mod layout;

@@ -81,7 +81,7 @@ pub fn write_replica_layout(scene: &SyntheticScene, dir: &Path, progress: impl F
     write_json(&dir.join("scene.json"), &SceneDescription::of(scene))?;
     for object in scene.objects() {
         object
-            .mesh_in_world
+            .surface_in_world
             .write_ply(&dir.join("gt_meshes").join(format!("obj_{}.ply", object.id)))?;
     }
     Ok(())

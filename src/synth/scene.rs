@@ -41,8 +41,11 @@ pub struct SceneObject {
     pub design: Design,
     /// Pose: object frame (z up, origin at the footprint centre on the floor) → world.
     pub world_from_object: Isometry3<f32>,
-    /// Ground-truth mesh in world coordinates.
+    /// Its parts merged, in world coordinates (what the renderer casts rays against).
     pub mesh_in_world: TriangleMesh,
+    /// Ground-truth surface in world coordinates: the parts without what lies inside another
+    /// part ([`Design::surface`]).
+    pub surface_in_world: TriangleMesh,
 }
 
 impl SceneObject {
@@ -86,13 +89,15 @@ impl SyntheticScene {
             .into_iter()
             .zip(1..)
             .map(|(p, id)| {
-                let mesh = design_meshes.entry(p.design).or_insert_with(|| p.design.mesh());
-                let mesh_in_world = mesh.transformed(&p.world_from_object);
+                let (mesh, surface) = design_meshes
+                    .entry(p.design)
+                    .or_insert_with(|| (p.design.mesh(), p.design.surface()));
                 SceneObject {
                     id: ObjectId(id),
                     design: p.design,
                     world_from_object: p.world_from_object,
-                    mesh_in_world,
+                    mesh_in_world: mesh.transformed(&p.world_from_object),
+                    surface_in_world: surface.transformed(&p.world_from_object),
                 }
             })
             .collect();
@@ -168,7 +173,7 @@ impl SyntheticScene {
             .iter()
             .map(|o| {
                 let mut rng = seeded_rng(self.seed, RngStream::Object(o.id));
-                o.mesh_in_world
+                o.surface_in_world
                     .sample_surface(OBSERVATION_SAMPLES, &mut rng)
                     .unwrap_or_default()
             })

@@ -54,8 +54,14 @@ fn completion_per_object(
         .iter()
         .map(|o| {
             let mut rng = seeded_rng(0, RngStream::Object(o.id));
-            let scores = score_object(&o.mesh_in_world, meshes.objects.get(&o.id), Crop::Paper, 5000, &mut rng)
-                .expect("scorable ground truth");
+            let scores = score_object(
+                &o.surface_in_world,
+                meshes.objects.get(&o.id),
+                Crop::Paper,
+                5000,
+                &mut rng,
+            )
+            .expect("scorable ground truth");
             (o.id, scores.completion_cm.unwrap_or(f32::INFINITY))
         })
         .collect()

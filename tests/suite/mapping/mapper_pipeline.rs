@@ -161,7 +161,7 @@ fn observed_clouds_only_grow_and_lie_on_the_ground_truth_surface() {
         let truth = scene.object(object.id).expect("mapped objects exist in the scene");
         let mut rng = seeded_rng(1, RngStream::Object(object.id));
         let samples = truth
-            .mesh_in_world
+            .surface_in_world
             .sample_surface(200_000, &mut rng)
             .expect("mesh has area");
         let mean = PointIndex::new(&samples)

@@ -90,7 +90,7 @@ fn object_depth_back_projects_onto_its_ground_truth_mesh() {
         .iter()
         .map(|o| {
             let samples = o
-                .mesh_in_world
+                .surface_in_world
                 .sample_surface(200_000, &mut rng)
                 .expect("objects have area");
             let points: Vec<[f32; 3]> = samples.iter().map(|p| [p.x, p.y, p.z]).collect();
@@ -223,7 +223,7 @@ fn the_written_layout_matches_the_replica_vmap_format() {
         let mesh =
             TriangleMesh::read_ply(&dir.path().join(format!("gt_meshes/obj_{}.ply", object.id))).expect("GT mesh");
         assert_eq!(
-            mesh, object.mesh_in_world,
+            mesh, object.surface_in_world,
             "GT mesh of object {} round-trips",
             object.id
         );
