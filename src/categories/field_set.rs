@@ -130,10 +130,7 @@ impl CategoryFieldSet {
             subcategories.into_iter().filter(|g| g.members.len() > 1).collect();
         groups.sort_by_key(|g| g.representative);
         let wanted: Vec<Vec<ObjectId>> = groups.iter().map(|g| g.members.keys().copied().collect()).collect();
-        let nocs: BTreeMap<ObjectId, NocsFrame> = groups
-            .iter()
-            .flat_map(|g| g.members.iter().map(|(id, m)| (*id, m.nocs)))
-            .collect();
+        let nocs: BTreeMap<ObjectId, NocsFrame> = groups.iter().flat_map(|g| g.frames()).collect();
         let moved = self.moved_frames(&nocs, frames);
         if wanted != self.members || !moved.is_empty() {
             let mut plan = plan_category_fields(&self.members, &wanted);

@@ -121,20 +121,20 @@ impl FrameChange {
     }
 }
 
-/// A member's frame after a registration.
+/// A representative's frame after a registration.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum MemberFrame {
-    /// It had none: the proposed one.
+pub enum RepresentativeFrame {
+    /// It had none: its box's.
     New(NocsFrame),
-    /// The held one, its box grown to hold the member's cloud.
+    /// The held one, its box grown to hold the representative's cloud.
     Held(NocsFrame),
     /// The proposed box on the axes the held frame had ([`FramePolicy::KeepAxes`]).
     Refitted(NocsFrame),
-    /// The proposed one, replacing a held frame it lies too far from.
+    /// Its box's, replacing a held frame it lies too far from (or `rebuild`).
     Replaced(NocsFrame),
 }
 
-impl MemberFrame {
+impl RepresentativeFrame {
     /// The frame.
     pub fn frame(&self) -> NocsFrame {
         match *self {
@@ -166,28 +166,26 @@ pub fn nearest_quarter_turn(held: &NocsFrame, proposed: &NocsFrame) -> NocsFrame
     frame
 }
 
-/// The frame of a member whose `cloud` (world) registration proposes `proposed` for, given the
-/// frame it `held` (module doc).
+/// The frame of a representative whose `cloud` (world) is boxed by `refit` now, given the frame
+/// it `held` after the previous registration (module doc; turns measured up to the box's quarter
+/// turns about up).
 pub fn hold_frame(
     held: Option<&NocsFrame>,
-    proposed: NocsFrame,
-    symmetry: FrameSymmetry,
+    refit: NocsFrame,
     cloud: &[Point3<f32>],
     cfg: &FrameHoldConfig,
     min_extent: f32,
-) -> Result<MemberFrame> {
+) -> Result<RepresentativeFrame> {
     let Some(held) = held else {
-        return Ok(MemberFrame::New(proposed));
+        return Ok(RepresentativeFrame::New(refit));
     };
-    match (cfg.policy, symmetry) {
-        (FramePolicy::Hold, _) if frame_change(held, &proposed, symmetry).within(cfg) => {
-            Ok(MemberFrame::Held(held.covering(cloud, min_extent)?))
+    Ok(match cfg.policy {
+        FramePolicy::Hold if frame_change(held, &refit, FrameSymmetry::QuarterTurnsAboutUp).within(cfg) => {
+            RepresentativeFrame::Held(held.covering(cloud, min_extent)?)
         }
-        (FramePolicy::KeepAxes, FrameSymmetry::QuarterTurnsAboutUp) => {
-            Ok(MemberFrame::Refitted(nearest_quarter_turn(held, &proposed)))
-        }
-        _ => Ok(MemberFrame::Replaced(proposed)),
-    }
+        FramePolicy::KeepAxes => RepresentativeFrame::Refitted(nearest_quarter_turn(held, &refit)),
+        FramePolicy::Hold | FramePolicy::Rebuild => RepresentativeFrame::Replaced(refit),
+    })
 }
 
 #[cfg(test)]
@@ -230,9 +228,7 @@ mod tests {
         // Refitted a little off, with the longer horizontal edge now on the other side.
         let refit = frame(0.01, 0.15 + std::f32::consts::FRAC_PI_2, [0.52, 0.5, 0.9]);
         let cfg = FrameHoldConfig::default();
-        let MemberFrame::Refitted(kept) =
-            hold_frame(Some(&held), refit, FrameSymmetry::QuarterTurnsAboutUp, &[], &cfg, 0.1).unwrap()
-        else {
+        let RepresentativeFrame::Refitted(kept) = hold_frame(Some(&held), refit, &[], &cfg, 0.1).unwrap() else {
             panic!("the default refits on the held axes")
         };
         let turn = frame_change(&held, &kept, FrameSymmetry::None);
@@ -264,16 +260,8 @@ mod tests {
         // The cloud grew: a point 0.3 m out along x, and the refit box moved 2 cm and grew.
         let cloud = [Point3::new(0.3, 1.0, 0.4), Point3::new(-0.1, 1.1, 0.1)];
         let refit = frame(0.02, 0.05, [0.6, 0.4, 0.8]);
-        let kept = hold_frame(
-            Some(&held),
-            refit,
-            FrameSymmetry::QuarterTurnsAboutUp,
-            &cloud,
-            &cfg,
-            0.1,
-        )
-        .unwrap();
-        let MemberFrame::Held(kept) = kept else {
+        let kept = hold_frame(Some(&held), refit, &cloud, &cfg, 0.1).unwrap();
+        let RepresentativeFrame::Held(kept) = kept else {
             panic!("within the tolerance: {kept:?}")
         };
         assert_eq!(kept.world_from_nocs, held.world_from_nocs, "pose and scale held");
@@ -282,25 +270,29 @@ mod tests {
             "the box grows to hold the cloud: {}",
             kept.extents
         );
-        let flipped = frame(0.0, std::f32::consts::PI, [0.4, 0.4, 0.8]);
-        let replaced = hold_frame(Some(&held), flipped, FrameSymmetry::None, &cloud, &cfg, 0.1).unwrap();
-        assert_eq!(replaced, MemberFrame::Replaced(flipped), "an alignment half a turn off");
+        let turned = frame(0.0, std::f32::consts::FRAC_PI_4, [0.4, 0.4, 0.8]);
+        let replaced = hold_frame(Some(&held), turned, &cloud, &cfg, 0.1).unwrap();
+        assert_eq!(
+            replaced,
+            RepresentativeFrame::Replaced(turned),
+            "45° from every quarter turn"
+        );
         let rescaled = frame(0.0, 0.0, [0.4, 0.4, 1.2]);
         assert!(matches!(
-            hold_frame(Some(&held), rescaled, FrameSymmetry::None, &cloud, &cfg, 0.1).unwrap(),
-            MemberFrame::Replaced(_)
+            hold_frame(Some(&held), rescaled, &cloud, &cfg, 0.1).unwrap(),
+            RepresentativeFrame::Replaced(_)
         ));
         let rebuild = FrameHoldConfig {
             policy: FramePolicy::Rebuild,
             ..cfg
         };
         assert_eq!(
-            hold_frame(Some(&held), refit, FrameSymmetry::None, &cloud, &rebuild, 0.1).unwrap(),
-            MemberFrame::Replaced(refit)
+            hold_frame(Some(&held), refit, &cloud, &rebuild, 0.1).unwrap(),
+            RepresentativeFrame::Replaced(refit)
         );
         assert_eq!(
-            hold_frame(None, refit, FrameSymmetry::None, &cloud, &cfg, 0.1).unwrap(),
-            MemberFrame::New(refit)
+            hold_frame(None, refit, &cloud, &cfg, 0.1).unwrap(),
+            RepresentativeFrame::New(refit)
         );
     }
 }

@@ -95,8 +95,6 @@ pub(crate) struct MapperState {
     category_remaps: u32,
     /// Each category field's creation number (its key in the step scheduler).
     category_ids: Vec<u32>,
-    /// Every category member's place (its field, code and frame) after the latest membership update.
-    category_places: BTreeMap<ObjectId, catmap::categories::field_set::MemberPlace>,
     category_frames_replaced: u32,
     category_retired: Vec<catmap::categories::field_set::RetiredField>,
     /// What the caller stored beside the mapper (e.g. the command line), as JSON.
@@ -185,7 +183,6 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
         category_fields_created: category.fields_created,
         category_remaps: category.remaps,
         category_ids: category.ids.clone(),
-        category_places: category.places.clone(),
         category_frames_replaced: category.frames_replaced,
         category_retired: category.retired.clone(),
         extra,
@@ -290,6 +287,7 @@ pub(crate) fn restore(
     }
 
     let mut index = BTreeMap::new();
+    let mut places = BTreeMap::new();
     for o in state.objects {
         let mut e = world.spawn((
             o.object,
@@ -314,6 +312,7 @@ pub(crate) fn restore(
             e.insert(membership);
         }
         if let Some(slot) = o.category_slot {
+            places.insert(o.object.id, slot.0);
             e.insert(slot);
         }
         index.insert(o.object.id, e.id());
@@ -361,7 +360,8 @@ pub(crate) fn restore(
     category.fields_created = state.category_fields_created;
     category.remaps = state.category_remaps;
     category.ids = state.category_ids;
-    category.places = state.category_places;
+    // The field set's places are its members' slots (`sync_category_fields` keeps them equal).
+    category.places = places;
     category.frames_replaced = state.category_frames_replaced;
     category.retired = state.category_retired;
     if category.ids.len() != category.members.len() {

@@ -16,7 +16,7 @@ pub use config::{CategoryConfig, RegistrationStart};
 pub use pair_cache::{CachedPair, PairCache, PairPoints, PairVersions};
 pub use pairs::warm_start_holds;
 
-use crate::categories::held_frames::{FrameSymmetry, MemberFrame, hold_frame};
+use crate::categories::held_frames::{RepresentativeFrame, hold_frame};
 use crate::categories::nocs::{NocsFrame, aligned_member_frame, representative_frame};
 use crate::categories::subcategories::{Alignment, subcategorize};
 use crate::error::{CatmapError, Result};
@@ -68,13 +68,17 @@ pub struct ClassRegistration {
     pub pairs: PairCache,
 }
 
+impl RegisteredSubcategory {
+    /// Its members' frames, by id.
+    pub fn frames(&self) -> impl Iterator<Item = (ObjectId, NocsFrame)> + '_ {
+        self.members.iter().map(|(id, m)| (*id, m.nocs))
+    }
+}
+
 impl ClassRegistration {
     /// Every member's frame, by id.
     pub fn frames(&self) -> BTreeMap<ObjectId, NocsFrame> {
-        self.groups
-            .iter()
-            .flat_map(|g| g.members.iter().map(|(id, m)| (*id, m.nocs)))
-            .collect()
+        self.groups.iter().flat_map(RegisteredSubcategory::frames).collect()
     }
 }
 
@@ -120,12 +124,11 @@ pub fn register_class(
             let rep_frame = hold_frame(
                 held.get(&rep),
                 representative_frame(&by_id[&rep].bounds),
-                FrameSymmetry::QuarterTurnsAboutUp,
                 &by_id[&rep].cloud,
                 &cfg.frames,
                 cfg.min_extent_m,
             )?;
-            if let MemberFrame::Replaced(_) = rep_frame {
+            if let RepresentativeFrame::Replaced(_) = rep_frame {
                 tracing::debug!(representative = %rep, "subcategory frame replaced");
             }
             let rep_frame = rep_frame.frame();
