@@ -11,6 +11,7 @@
 //! gradient, and unpacked into canonical order once per step. Padding lanes are zero.
 
 use super::gemm::{ALayout, Gemm, Init, PANEL, Post, add_column_sums, padded};
+use super::narrow_gradient::{NARROW_OUTPUTS, add_narrow_weight_gradient};
 use super::simd::Backend;
 
 /// Activation applied by [`Dense::forward`].
@@ -185,7 +186,9 @@ impl Dense {
         }
     }
 
-    /// Accumulates `dWᵀ_s += x_sᵀ dy` and `db += Σ dy` into the packed gradient `grad`.
+    /// Accumulates `dWᵀ_s += x_sᵀ dy` and `db += Σ dy` into the packed gradient `grad` (a layer of
+    /// at most [`NARROW_OUTPUTS`] outputs sums scaled input rows, bit-identically:
+    /// [`super::narrow_gradient`]).
     pub(crate) fn backward_weights(
         &self,
         backend: Backend,
@@ -196,6 +199,11 @@ impl Dense {
     ) {
         for (seg, x) in inputs.iter().enumerate() {
             let k = self.segments[seg];
+            let grad_w = &mut grad[self.grad_w[seg]..self.grad_w[seg] + k * self.out_pad];
+            if self.out <= NARROW_OUTPUTS {
+                add_narrow_weight_gradient(backend, n, *x, k, dy, self.out, grad_w, self.out_pad);
+                continue;
+            }
             Gemm {
                 m: k,
                 k: n,
@@ -206,7 +214,7 @@ impl Dense {
                 b: dy.data,
                 b_panel_stride: PANEL,
                 b_row_stride: dy.ld,
-                c: &mut grad[self.grad_w[seg]..self.grad_w[seg] + k * self.out_pad],
+                c: grad_w,
                 ldc: self.out_pad,
                 init: Init::Accumulate,
                 post: Post::Identity,

@@ -17,6 +17,7 @@
 //! | `heads` | the heads every network ends in: sigmoids, a chunk's render, loss and head gradients |
 //! | `adamw` | PyTorch AdamW, per-field state |
 //! | `gemm`, `simd`, `dense` | SIMD GEMM micro-kernels and packed linear layers |
+//! | `narrow_gradient` | the weight gradient of the 1- and 3-wide heads without padded panels |
 //! | `occupancy` | the occupancy MLP on a chunk (fused forward + backward) |
 //! | `fused_batch`, `tasks` | the one fused training step of any batch of fields, its parallel plan |
 //! | `object_field`, `batch`, `samples` | the occupancy field and its batch ([`FieldBatch`]) |
@@ -41,6 +42,7 @@ mod gemm;
 mod heads;
 mod layout;
 mod loss;
+mod narrow_gradient;
 mod object_field;
 mod occupancy;
 mod ray_sampler;
