@@ -81,10 +81,6 @@ impl NarrowGradient<'_> {
     }
 
     /// 16 inputs of every output at a time, their sums held in `OUT × NR` registers.
-    #[expect(
-        clippy::needless_range_loop,
-        reason = "indexing by constants keeps the sums in registers"
-    )]
     #[inline(always)]
     fn blocks<S: Simd, const NR: usize, const OUT: usize>(self, simd: S) {
         if NR * S::F32_LANES != PANEL {

@@ -18,7 +18,8 @@ pub mod snapshot;
 pub mod summary;
 pub mod training_report;
 
-// Rerun: the entity paths logged to, and recording files.
+// Rerun: the entity paths logged to, the viewer layout, and recording files.
+pub mod blueprint;
 pub mod rerun_paths;
 pub mod rrd_file;
 

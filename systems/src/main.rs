@@ -19,6 +19,10 @@ struct Cli {
     /// The options of `catmap run`, for `catmap` without a subcommand.
     #[command(flatten)]
     run: cli::run::RunArgs,
+    /// Colour the log lines on stderr: `auto` when stderr is a terminal (a file or a pipe gets
+    /// plain text), `always`, or `never`.
+    #[arg(long, value_enum, default_value_t = cli::color::ColorChoice::Auto, global = true)]
+    color: cli::color::ColorChoice,
 }
 
 /// The version, with the commit it was built from when built from a git checkout (`build.rs`).
@@ -39,14 +43,15 @@ enum Command {
 }
 
 fn main() -> anyhow::Result<()> {
+    let cli = Cli::parse();
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
     tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
+        .with_ansi(cli.color.ansi_on_stderr())
         .with_target(false)
         .init();
-    let cli = Cli::parse();
     match cli.command.unwrap_or(Command::Run(cli.run)) {
         Command::Run(args) => cli::run::run(&args),
         Command::Synth(args) => cli::synth::synth(&args),

@@ -126,6 +126,7 @@ impl Mapper {
 
     /// Logs to `recording` from now on (the `Log` stage only runs with a recording).
     pub fn set_recording(&mut self, recording: rerun::RecordingStream) {
+        crate::blueprint::send_mapper_blueprint(&recording);
         log_world_setup(&recording);
         self.world.insert_resource(Rerun(recording));
     }

@@ -5,10 +5,13 @@
 //! world                          view coordinates (right-handed, z up)
 //! world/camera                   camera pose
 //! world/camera/image             pinhole; rgb, depth, instances below it
-//! world/background/{mesh,loss,steps}
-//! world/objects/{id}/{points,box,aligned_box,reliability,mesh,loss,steps,shape_code_norm,texture_code_norm}
-//! world/categories/{n}/loss      loss of the category field created n-th (its number holds
-//!                                while the field continues under a new membership)
+//! world/background/mesh
+//! world/objects/{id}/{points,box,aligned_box,reliability,mesh}
+//! training/{quantity}/{field}    time series, one view per quantity: loss, steps, carving_share,
+//!                                shape_code_norm, texture_code_norm; field = background,
+//!                                objects/{id} or categories/{n} (the category field created
+//!                                n-th: its number holds while it continues under a new
+//!                                membership)
 //! ```
 
 use catmap::ObjectId;
@@ -27,9 +30,13 @@ pub const DEPTH: &str = "world/camera/image/depth";
 pub const INSTANCES: &str = "world/camera/image/instances";
 /// Root of the background's entities.
 pub const BACKGROUND: &str = "world/background";
+/// Root of the training's time series.
+pub const TRAINING: &str = "training";
 
 /// The stream's timeline: the newest frame's index.
 pub const FRAME_TIMELINE: &str = "frame";
+/// The wall clock, beside every other timeline.
+pub const WALL_CLOCK_TIMELINE: &str = "time";
 /// The category phase's timeline: category steps run.
 pub const CATEGORY_TIMELINE: &str = "category_step";
 
@@ -64,7 +71,7 @@ pub enum OwnerEntity {
 }
 
 impl OwnerEntity {
-    /// The last part of the path.
+    /// The last part of the path (of a scene entity), or the time series' quantity.
     fn name(self) -> &'static str {
         match self {
             Self::Points => "points",
@@ -79,22 +86,55 @@ impl OwnerEntity {
             Self::TextureCodeNorm => "texture_code_norm",
         }
     }
+
+    /// Whether it is logged in the 3D scene (under `world`) or as a time series (under
+    /// `training/{quantity}`).
+    fn place(self) -> EntityPlace {
+        match self {
+            Self::Points | Self::Box | Self::AlignedBox | Self::Reliability | Self::Mesh => EntityPlace::Scene,
+            Self::Loss | Self::Steps | Self::CarvingShare | Self::ShapeCodeNorm | Self::TextureCodeNorm => {
+                EntityPlace::TimeSeries
+            }
+        }
+    }
+}
+
+/// Where an owner's entity lives in the tree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum EntityPlace {
+    /// `world/objects/{id}/{name}` or `world/background/{name}`.
+    Scene,
+    /// `training/{name}/objects/{id}` or `training/{name}/background`.
+    TimeSeries,
+}
+
+/// The time series root of `quantity` (e.g. `training/loss`), the origin of its plot.
+pub fn time_series(quantity: OwnerEntity) -> String {
+    format!("{TRAINING}/{}", quantity.name())
 }
 
 /// The path of `entity` of object `owner` (`None`: the background).
 pub fn of(owner: Option<ObjectId>, entity: OwnerEntity) -> String {
-    let root = owner.map_or_else(|| BACKGROUND.to_owned(), object);
-    format!("{root}/{}", entity.name())
+    match entity.place() {
+        EntityPlace::Scene => {
+            let root = owner.map_or_else(|| BACKGROUND.to_owned(), object);
+            format!("{root}/{}", entity.name())
+        }
+        EntityPlace::TimeSeries => {
+            let field = owner.map_or_else(|| "background".to_owned(), |id| format!("objects/{id}"));
+            format!("{}/{field}", time_series(entity))
+        }
+    }
 }
 
 /// The loss of category field number `n` (its creation number, not its place in the batch).
 pub fn category_loss(n: u32) -> String {
-    format!("world/categories/{n}/loss")
+    format!("{}/categories/{n}", time_series(OwnerEntity::Loss))
 }
 
 /// The carving share of category field number `n`'s samples (see [`OwnerEntity::CarvingShare`]).
 pub fn category_carving_share(n: u32) -> String {
-    format!("world/categories/{n}/carving_share")
+    format!("{}/categories/{n}", time_series(OwnerEntity::CarvingShare))
 }
 
 #[cfg(test)]
@@ -108,7 +148,9 @@ mod tests {
             "world/objects/7/aligned_box"
         );
         assert_eq!(of(None, OwnerEntity::Mesh), "world/background/mesh");
-        assert_eq!(category_loss(2), "world/categories/2/loss");
+        assert_eq!(of(Some(ObjectId(7)), OwnerEntity::Loss), "training/loss/objects/7");
+        assert_eq!(of(None, OwnerEntity::Steps), "training/steps/background");
+        assert_eq!(category_loss(2), "training/loss/categories/2");
         assert!(RGB.starts_with(IMAGE) && IMAGE.starts_with(CAMERA) && CAMERA.starts_with(WORLD));
     }
 }

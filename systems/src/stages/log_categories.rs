@@ -1,6 +1,8 @@
 //! Rerun logging of the category phase: each category field's loss under
-//! `world/categories/{n}/loss` (n: its creation number) and carving share under `…/carving_share`, and each member's code norms under
-//! `world/objects/{id}/shape_code_norm` and `…/texture_code_norm`, on the `category_step` timeline.
+//! `training/loss/categories/{n}` (n: its creation number) and carving share under
+//! `training/carving_share/categories/{n}`, and each member's code norms under
+//! `training/shape_code_norm/objects/{id}` and `training/texture_code_norm/objects/{id}`, on the
+//! `category_step` timeline.
 
 use bevy_ecs::prelude::*;
 
@@ -16,6 +18,7 @@ pub fn log_category_training(rerun: Res<Rerun>, fields: Res<CategoryFields>, mem
         return;
     }
     rerun.0.set_time_sequence(CATEGORY_TIMELINE, fields.steps_done as i64);
+    rerun.0.set_time(paths::WALL_CLOCK_TIMELINE, std::time::SystemTime::now());
     for (n, loss) in fields.ids.iter().zip(&fields.losses) {
         let path = paths::category_loss(*n);
         warn_on_error(

@@ -34,6 +34,14 @@ use crate::stages::meshes::OwnerMesh;
 #[derive(Resource, Clone)]
 pub struct Rerun(pub rerun::RecordingStream);
 
+impl Rerun {
+    /// Stamps what is logged next with frame `frame` and the wall clock (the `time` timeline).
+    pub fn at_frame(&self, frame: u64) {
+        self.0.set_time_sequence(paths::FRAME_TIMELINE, frame as i64);
+        self.0.set_time(paths::WALL_CLOCK_TIMELINE, std::time::SystemTime::now());
+    }
+}
+
 /// Logs the static view coordinates once.
 pub fn log_world_setup(rerun: &rerun::RecordingStream) {
     warn_on_error(
@@ -47,7 +55,7 @@ pub fn log_camera_frames(rerun: Res<Rerun>, settings: Res<Settings>, frames: Que
     let cfg = &settings.0.rerun;
     for frame in &frames {
         let frame = &frame.0;
-        rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.index.0 as i64);
+        rerun.at_frame(frame.index.0);
         log_camera_pose(&rerun.0, frame);
         if frame.index.0.is_multiple_of(u64::from(cfg.image_every)) {
             log_images(&rerun.0, frame, cfg.image_downscale, cfg.jpeg_quality);
@@ -150,7 +158,7 @@ pub fn log_object_clouds(
 ) {
     let cfg = &settings.0.rerun;
     let Some(frame) = progress.last_frame else { return };
-    rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.0 as i64);
+    rerun.at_frame(frame.0);
     let ended = progress.ended.is_some();
     let mut objects: Vec<_> = objects.iter().collect();
     objects.sort_by_key(|(object, _, _)| object.id);
@@ -203,7 +211,7 @@ pub fn log_field_losses(
     owners: Query<(Option<&Object>, &FieldLoss), Changed<FieldLoss>>,
 ) {
     let Some(frame) = progress.last_frame else { return };
-    rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.0 as i64);
+    rerun.at_frame(frame.0);
     for (object, loss) in &owners {
         if loss.steps == 0 {
             continue;
@@ -230,7 +238,7 @@ pub fn log_field_meshes(
     owners: Query<(Option<&Object>, &FieldMesh, Option<&Membership>), Changed<FieldMesh>>,
 ) {
     if let Some(frame) = progress.last_frame {
-        rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.0 as i64);
+        rerun.at_frame(frame.0);
     }
     for (object, mesh, membership) in &owners {
         log_owner_mesh(&rerun, object.map(|o| o.id), &mesh.mesh, mesh.source, membership);
@@ -246,7 +254,7 @@ pub fn log_final_meshes(
 ) {
     let Some(rerun) = rerun else { return };
     if let Some(frame) = progress.last_frame {
-        rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.0 as i64);
+        rerun.at_frame(frame.0);
     }
     for owned in meshes {
         let membership = memberships.get(owned.entity).ok();
@@ -292,7 +300,7 @@ pub fn log_memberships(
     members: Query<(&Object, &Membership, Option<&Reliability>), Changed<Membership>>,
 ) {
     if let Some(frame) = progress.last_frame {
-        rerun.0.set_time_sequence(paths::FRAME_TIMELINE, frame.0 as i64);
+        rerun.at_frame(frame.0);
     }
     for (object, membership, reliability) in &members {
         let path = paths::of(Some(object.id), OwnerEntity::AlignedBox);

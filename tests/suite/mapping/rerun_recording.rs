@@ -1,5 +1,5 @@
-//! The recording a run writes decodes with Rerun's own decoder and holds the camera, its images
-//! and every object's cloud, box, field loss and mesh.
+//! The recording a run writes decodes with Rerun's own decoder and holds the camera, its images,
+//! every object's cloud, box, field loss and mesh, and the viewer layout.
 
 use std::collections::BTreeSet;
 use std::ops::ControlFlow;
@@ -7,22 +7,43 @@ use std::ops::ControlFlow;
 use catmap::MapperConfig;
 use catmap::dataset::FrameSource;
 use catmap::synth::{Preset, SyntheticScene};
+use catmap_systems::blueprint::titles;
 use catmap_systems::rrd_file::{RrdFooter, save_rrd};
 use catmap_systems::{Mapper, RunOutcome};
 use re_log_encoding::DecoderApp;
 use re_log_types::LogMsg;
 
-/// Entity paths found in an .rrd file, without the leading slash.
-fn entity_paths(path: &std::path::Path) -> BTreeSet<String> {
+/// What an .rrd file holds: the recording's entity paths (without the leading slash), and the
+/// blueprint's chunks printed as tables.
+struct Decoded {
+    paths: BTreeSet<String>,
+    blueprint: Vec<String>,
+}
+
+fn decode(path: &std::path::Path) -> Decoded {
     let file = std::fs::File::open(path).expect("the recording exists");
-    let mut paths = BTreeSet::new();
+    let mut decoded = Decoded {
+        paths: BTreeSet::new(),
+        blueprint: Vec::new(),
+    };
     for message in DecoderApp::decode_lazy(std::io::BufReader::new(file)) {
-        if let LogMsg::ArrowMsg(_, arrow) = message.expect("every message decodes") {
+        if let LogMsg::ArrowMsg(store, arrow) = message.expect("every message decodes") {
             let chunk = re_chunk::Chunk::from_arrow_msg(&arrow).expect("every message is a chunk");
-            paths.insert(chunk.entity_path().to_string().trim_start_matches('/').to_owned());
+            if store.is_blueprint() {
+                decoded.blueprint.push(chunk.to_string());
+            } else {
+                decoded
+                    .paths
+                    .insert(chunk.entity_path().to_string().trim_start_matches('/').to_owned());
+            }
         }
     }
-    paths
+    decoded
+}
+
+/// Entity paths of the recording in an .rrd file, without the leading slash.
+fn entity_paths(path: &std::path::Path) -> BTreeSet<String> {
+    decode(path).paths
 }
 
 #[test]
@@ -65,14 +86,14 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         let map = mapper.finish();
         assert!(map.objects.len() >= 3, "the small scene maps several objects");
     }
-    let paths = entity_paths(&rrd);
+    let Decoded { paths, blueprint } = decode(&rrd);
     for expected in [
         "world",
         "world/camera",
         "world/camera/image",
         "world/camera/image/rgb",
         "world/camera/image/depth",
-        "world/categories/0/loss",
+        "training/loss/categories/0",
         "world/camera/image/instances",
     ] {
         assert!(paths.contains(expected), "{expected} missing from {paths:?}");
@@ -93,20 +114,38 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
             .filter(|p| p.starts_with("world/objects/") && p.ends_with(suffix))
             .count()
     };
-    assert!(with_suffix("/loss") >= 3, "field losses are logged: {paths:?}");
+    let series = |quantity: &str| {
+        paths
+            .iter()
+            .filter(|p| p.starts_with(&format!("training/{quantity}/objects/")))
+            .count()
+    };
+    assert!(series("loss") >= 3, "field losses are logged: {paths:?}");
+    assert!(series("steps") >= 3, "field steps are logged: {paths:?}");
     assert!(with_suffix("/mesh") >= 3, "preview meshes are logged: {paths:?}");
+    assert!(series("shape_code_norm") >= 2, "the members' code norms are logged: {paths:?}");
+    assert!(series("texture_code_norm") >= 2, "the members' code norms are logged: {paths:?}");
     assert!(
-        with_suffix("/shape_code_norm") >= 2,
-        "the members' code norms are logged: {paths:?}"
-    );
-    assert!(
-        with_suffix("/texture_code_norm") >= 2,
-        "the members' code norms are logged: {paths:?}"
-    );
-    assert!(
-        paths.contains("world/background/loss"),
+        paths.contains("training/loss/background"),
         "the background's loss is logged"
     );
+    // The viewer layout: its views, by title, kind and origin (a chunk prints as a table with
+    // a `[value]` cell per component).
+    let layout = blueprint.join("\n");
+    for (title, kind, origin) in [
+        (titles::MAP, "3D", "/world"),
+        (titles::CAMERA, "2D", "/world/camera/image"),
+        (titles::LOSS, "TimeSeries", "/training/loss"),
+        (titles::STEPS, "TimeSeries", "/training/steps"),
+        (titles::CARVING, "TimeSeries", "/training/carving_share"),
+    ] {
+        let view = blueprint
+            .iter()
+            .find(|chunk| chunk.contains("ViewBlueprint:display_name") && chunk.contains(&format!("[{title}]")))
+            .unwrap_or_else(|| panic!("no view titled {title} in the blueprint:\n{layout}"));
+        assert!(view.contains(&format!("[{kind}]")), "{title} is a {kind} view:\n{view}");
+        assert!(view.contains(&format!("[{origin}]")), "{title} shows {origin}:\n{view}");
+    }
     assert!(
         paths.contains("world/background/mesh"),
         "the final meshes are logged (the background is only meshed at the end): {paths:?}"
