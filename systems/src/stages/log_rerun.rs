@@ -245,10 +245,12 @@ pub fn log_field_meshes(
     }
 }
 
-/// Logs the final meshes when the mapper records (run once, by `Mapper::extract_final_meshes`).
+/// Logs the final meshes when the mapper records (run once, by `Mapper::extract_final_meshes`),
+/// clustered on `rerun.final_mesh_cell_m` (the written .ply files keep every triangle).
 pub fn log_final_meshes(
     InRef(meshes): InRef<[OwnerMesh]>,
     rerun: Option<Res<Rerun>>,
+    settings: Res<Settings>,
     progress: Res<StreamProgress>,
     memberships: Query<&Membership>,
 ) {
@@ -256,9 +258,11 @@ pub fn log_final_meshes(
     if let Some(frame) = progress.last_frame {
         rerun.at_frame(frame.0);
     }
+    let cell = settings.0.rerun.final_mesh_cell_m;
     for owned in meshes {
         let membership = memberships.get(owned.entity).ok();
-        log_owner_mesh(&rerun, owned.object, &owned.mesh, owned.source, membership);
+        let mesh = owned.mesh.clustered(cell);
+        log_owner_mesh(&rerun, owned.object, &mesh, owned.source, membership);
     }
 }
 
