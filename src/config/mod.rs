@@ -158,8 +158,8 @@ impl MapperConfig {
         if !(self.checkpoint.every_seconds >= 0.0 && self.checkpoint.every_seconds.is_finite()) {
             return bad("checkpoint.every_seconds must be a finite number of seconds, 0 or more (0: never)");
         }
-        if self.rerun.image_downscale == 0 || self.rerun.image_every == 0 {
-            return bad("rerun.image_downscale and rerun.image_every must be at least 1");
+        if self.rerun.image_downscale == 0 || self.rerun.image_every == 0 || self.rerun.depth_every == 0 {
+            return bad("rerun.image_downscale, rerun.image_every and rerun.depth_every must be at least 1");
         }
         Ok(())
     }

@@ -100,14 +100,26 @@ pub fn drive(start: Start, plan: RunPlan, source: Arc<dyn FrameSource>, started:
     Ok(())
 }
 
-/// One progress bar per phase of the run.
+/// One progress bar per phase of the run, and one log line when a phase ends (what it did, how
+/// long it took, at what rate) — the line stays in a log file, where bars are not drawn.
 struct PhaseBars {
-    /// The bar of the phase running, and which phase it is.
-    current: Option<(RunPhase, indicatif::ProgressBar)>,
+    /// The phase running and its bar.
+    current: Option<PhaseBar>,
     /// Stream positions.
     frames: u64,
     /// What the phase after the stream is called.
     after_stream: &'static str,
+}
+
+/// The bar of the phase running.
+struct PhaseBar {
+    phase: RunPhase,
+    bar: indicatif::ProgressBar,
+    /// When the bar started, and where the phase stood then (a resumed phase continues).
+    started: Instant,
+    from: u64,
+    /// Frames or steps done.
+    done: u64,
 }
 
 impl PhaseBars {
@@ -126,24 +138,57 @@ impl PhaseBars {
 
     /// Shows `progress`, starting its phase's bar when the phase changed.
     fn show(&mut self, progress: RunProgress) {
-        if self.current.as_ref().is_none_or(|(phase, _)| *phase != progress.phase) {
+        if self.current.as_ref().is_none_or(|current| current.phase != progress.phase) {
             self.finish();
-            let (cap, what) = match progress.phase {
-                RunPhase::Stream => (self.frames, "mapping"),
-                RunPhase::AfterStream => (progress.cap.unwrap_or(0), self.after_stream),
-                RunPhase::Categories => (progress.cap.unwrap_or(0), "category fields"),
+            let cap = match progress.phase {
+                RunPhase::Stream => self.frames,
+                RunPhase::AfterStream | RunPhase::Categories => progress.cap.unwrap_or(0),
             };
-            self.current = Some((progress.phase, bar(cap, what)));
+            let what = self.name(progress.phase);
+            self.current = Some(PhaseBar {
+                phase: progress.phase,
+                bar: bar(cap, what),
+                started: Instant::now(),
+                from: progress.done,
+                done: progress.done,
+            });
         }
-        if let Some((_, bar)) = &self.current {
-            bar.set_position(progress.done);
+        if let Some(current) = &mut self.current {
+            current.bar.set_position(progress.done);
+            current.done = progress.done;
         }
     }
 
-    /// Clears the bar shown.
+    /// What a phase is called on its bar and its line.
+    fn name(&self, phase: RunPhase) -> &'static str {
+        match phase {
+            RunPhase::Stream => "mapping",
+            RunPhase::AfterStream => self.after_stream,
+            RunPhase::Categories => "category fields",
+        }
+    }
+
+    /// Clears the bar shown and logs what its phase did (the rate counts what ran since the phase
+    /// started here).
     fn finish(&mut self) {
-        if let Some((_, bar)) = self.current.take() {
+        if let Some(PhaseBar {
+            phase,
+            bar,
+            started,
+            from,
+            done,
+        }) = self.current.take()
+        {
             bar.finish_and_clear();
+            let seconds = started.elapsed().as_secs_f64();
+            let rate = done.saturating_sub(from) as f64 / seconds.max(1e-9);
+            let what = self.name(phase);
+            match phase {
+                RunPhase::Stream => tracing::info!("{what}: {done} frames in {seconds:.1} s ({rate:.1} frames/s)"),
+                RunPhase::AfterStream | RunPhase::Categories => {
+                    tracing::info!("{what}: {done} steps in {seconds:.1} s ({rate:.1} steps/s)");
+                }
+            }
         }
     }
 }

@@ -50,7 +50,8 @@ pub fn log_world_setup(rerun: &rerun::RecordingStream) {
     );
 }
 
-/// Logs each new frame's pose, pinhole and (every `image_every` frames) its images.
+/// Logs each new frame's pose, pinhole and (every `image_every` frames) its colour and instance
+/// images, and its depth every `depth_every` frames.
 pub fn log_camera_frames(rerun: Res<Rerun>, settings: Res<Settings>, frames: Query<&CameraFrame, Added<CameraFrame>>) {
     let cfg = &settings.0.rerun;
     for frame in &frames {
@@ -59,6 +60,9 @@ pub fn log_camera_frames(rerun: Res<Rerun>, settings: Res<Settings>, frames: Que
         log_camera_pose(&rerun.0, frame);
         if frame.index.0.is_multiple_of(u64::from(cfg.image_every)) {
             log_images(&rerun.0, frame, cfg.image_downscale, cfg.jpeg_quality);
+        }
+        if frame.index.0.is_multiple_of(u64::from(cfg.depth_every)) {
+            log_depth(&rerun.0, frame, cfg.image_downscale);
         }
     }
 }
@@ -99,15 +103,6 @@ fn log_images(rec: &rerun::RecordingStream, frame: &RgbdFrame, downscale: u32, j
         Err(e) => tracing::warn!(error = %e, "cannot encode the colour image for Rerun"),
     }
 
-    let depth_mm: Vec<u16> = frame
-        .depth_m
-        .iter()
-        .map(|d| (d * 1000.0).round().clamp(0.0, 65535.0) as u16)
-        .collect();
-    let (depth_mm, _, _) = downscale_nearest(&depth_mm, k.width, k.height, downscale);
-    let depth = rerun::DepthImage::from_gray16(to_le_bytes(&depth_mm), [w, h]).with_meter(1000.0);
-    warn_on_error(rec.log(paths::DEPTH, &depth), paths::DEPTH);
-
     let labels: Vec<u16> = (0..frame.instances.len())
         .map(|i| match frame.instances.label(i) {
             InstanceLabel::Object(ObjectId(id)) => u16::try_from(id).unwrap_or(u16::MAX),
@@ -118,6 +113,19 @@ fn log_images(rec: &rerun::RecordingStream, frame: &RgbdFrame, downscale: u32, j
     let format = rerun::components::ImageFormat::segmentation([w, h], rerun::ChannelDatatype::U16);
     let segmentation = rerun::SegmentationImage::new(to_le_bytes(&labels), format);
     warn_on_error(rec.log(paths::INSTANCES, &segmentation), paths::INSTANCES);
+}
+
+/// Logs the depth image (u16 millimetres, at the colour image's size).
+fn log_depth(rec: &rerun::RecordingStream, frame: &RgbdFrame, downscale: u32) {
+    let k = frame.intrinsics;
+    let depth_mm: Vec<u16> = frame
+        .depth_m
+        .iter()
+        .map(|d| (d * 1000.0).round().clamp(0.0, 65535.0) as u16)
+        .collect();
+    let (depth_mm, w, h) = downscale_nearest(&depth_mm, k.width, k.height, downscale);
+    let depth = rerun::DepthImage::from_gray16(to_le_bytes(&depth_mm), [w, h]).with_meter(1000.0);
+    warn_on_error(rec.log(paths::DEPTH, &depth), paths::DEPTH);
 }
 
 /// Logs the legend of the instance image (object id → class name and colour) when objects
