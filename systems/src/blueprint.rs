@@ -1,6 +1,8 @@
-//! The viewer layout sent with every recording and live stream: the map large on the left; on
-//! the right the camera's view with its instance masks, and one time series per training
-//! quantity (field losses, steps, the carving share), so that convergence shows at a glance.
+//! The viewer layout sent with every recording and live stream: the map large on the left (a tab
+//! beside it shows the objects alone, with their subcategory boxes — the representative
+//! labelled "rep" — and uncertainty spheres); on the right the camera's view with its instance
+//! masks, and one time series per training quantity (field losses, steps, the carving share),
+//! so that convergence shows at a glance.
 //! Entity paths come from [`crate::rerun_paths`].
 
 use rerun::blueprint::{
@@ -14,6 +16,9 @@ use crate::rerun_paths::{self as paths, OwnerEntity};
 pub mod titles {
     /// The 3D map: meshes, clouds, boxes, the camera's frustum and image.
     pub const MAP: &str = "Map";
+    /// The objects alone: meshes (a category member's in its subcategory's colour), boxes in
+    /// their subcategory's colour, uncertainty spheres.
+    pub const CATEGORIES: &str = "Categories";
     /// The camera's colour image with the instance masks over it.
     pub const CAMERA: &str = "Camera";
     /// Every field's loss.
@@ -29,6 +34,10 @@ pub fn mapper_blueprint() -> Blueprint {
     let map = Spatial3DView::new(titles::MAP)
         .with_origin(format!("/{}", paths::WORLD))
         .into();
+    let categories = Spatial3DView::new(titles::CATEGORIES)
+        .with_origin(format!("/{}", paths::OBJECTS))
+        .into();
+    let scene = Tabs::new([map, categories]).into();
     // Depth would cover the colour image; the masks are drawn over it.
     let camera = Spatial2DView::new(titles::CAMERA)
         .with_origin(format!("/{}", paths::IMAGE))
@@ -46,7 +55,7 @@ pub fn mapper_blueprint() -> Blueprint {
     ])
     .into();
     let side = Vertical::new([camera, plots]).with_row_shares([1.0, 1.0]).into();
-    Blueprint::new(Horizontal::new([map, side]).with_column_shares([3.0, 2.0]))
+    Blueprint::new(Horizontal::new([scene, side]).with_column_shares([3.0, 2.0]))
 }
 
 /// Sends [`mapper_blueprint`] to `recording`, active and the default layout of catmap's

@@ -40,9 +40,12 @@ pub const WALL_CLOCK_TIMELINE: &str = "time";
 /// The category phase's timeline: category steps run.
 pub const CATEGORY_TIMELINE: &str = "category_step";
 
+/// Root of every object's entities.
+pub const OBJECTS: &str = "world/objects";
+
 /// Root of one object's entities.
 pub fn object(id: ObjectId) -> String {
-    format!("world/objects/{id}")
+    format!("{OBJECTS}/{id}")
 }
 
 /// What is logged under an object (or, for fields, the background).

@@ -134,6 +134,7 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
     let layout = blueprint.join("\n");
     for (title, kind, origin) in [
         (titles::MAP, "3D", "/world"),
+        (titles::CATEGORIES, "3D", "/world/objects"),
         (titles::CAMERA, "2D", "/world/camera/image"),
         (titles::LOSS, "TimeSeries", "/training/loss"),
         (titles::STEPS, "TimeSeries", "/training/steps"),
