@@ -6,6 +6,8 @@
 //! along `a`. Candidates are the principal axes, the world z axis and a Fibonacci hemisphere of
 //! directions; the best one is then refined on shrinking cones. The result is deterministic.
 
+use std::collections::HashMap;
+
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -243,43 +245,68 @@ const CANDIDATE_AXES: usize = 256;
 /// Lanes of the blocked argmax in [`support_points`] (independent lanes vectorise).
 const LANES: usize = 8;
 
-/// The points that are extreme (maximal) along at least one of `directions`, deduplicated.
-/// Projections are compared in `f32` on `LANES`-padded coordinate arrays (the support set only
-/// stands in for the hull; the chosen box is measured on every point in `f64`).
+/// Points per block of [`support_points`]: their coordinates (24 KiB) stay in L1 while every
+/// direction passes over them.
+const SUPPORT_BLOCK: usize = 2048;
+
+/// The points that are extreme (maximal) along at least one of `directions` (the last one on
+/// ties), deduplicated. Projections are compared in `f32` on `LANES`-padded coordinate arrays
+/// (the support set only stands in for the hull; the chosen box is measured on every point in
+/// `f64`). The points are visited block by block, every direction over a block before the next
+/// block, so that a large cloud (a ground-truth mesh: millions of vertices) is read from memory
+/// once rather than once per direction; each lane still sees its points in order.
 fn support_points(points: &[Vector3<f64>], directions: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
-    let padded = points.len().div_ceil(LANES) * LANES;
-    let mut xyz = [0, 1, 2].map(|k| points.iter().map(|p| p[k] as f32).collect::<Vec<f32>>());
+    // Only the last copy of a repeated point can be the last maximum, so the others are left out
+    // (a mesh whose triangles do not share vertices repeats each point about six times).
+    let kept = last_copies(points);
+    let padded = kept.len().div_ceil(LANES) * LANES;
+    let mut xyz = [0, 1, 2].map(|k| kept.iter().map(|&i| points[i][k] as f32).collect::<Vec<f32>>());
     // Padding repeats the last point, so a padding slot can only win where the last point does.
     xyz.iter_mut()
         .for_each(|c| c.resize(padded, c.last().copied().unwrap_or(0.0)));
-    let last = points.len() - 1;
-    let mut chosen: Vec<usize> = directions
+    let [xs, ys, zs] = &xyz;
+    let directions: Vec<Vector3<f32>> = directions.iter().map(|d| d.cast::<f32>()).collect();
+    let mut best = vec![([f32::NEG_INFINITY; LANES], [0u32; LANES]); directions.len()];
+    for start in (0..padded).step_by(SUPPORT_BLOCK) {
+        let end = (start + SUPPORT_BLOCK).min(padded);
+        let blocks = xs[start..end]
+            .chunks_exact(LANES)
+            .zip(ys[start..end].chunks_exact(LANES))
+            .zip(zs[start..end].chunks_exact(LANES));
+        for (d, (best, best_at)) in directions.iter().zip(&mut best) {
+            for (b, ((x, y), z)) in blocks.clone().enumerate() {
+                let first = (start + b * LANES) as u32;
+                for l in 0..LANES {
+                    let dot = x[l] * d.x + y[l] * d.y + z[l] * d.z;
+                    let better = dot >= best[l];
+                    best[l] = if better { dot } else { best[l] };
+                    best_at[l] = if better { first + l as u32 } else { best_at[l] };
+                }
+            }
+        }
+    }
+    let last = kept.len() - 1;
+    let mut chosen: Vec<usize> = best
         .iter()
-        .map(|d| argmax_projection(&xyz, d).min(last))
+        .map(|(best, best_at)| {
+            let winner = (0..LANES).max_by(|&a, &b| best[a].total_cmp(&best[b]).then(best_at[a].cmp(&best_at[b])));
+            kept[(best_at[winner.expect("LANES > 0")] as usize).min(last)]
+        })
         .collect();
     chosen.sort_unstable();
     chosen.dedup();
     chosen.into_iter().map(|i| points[i]).collect()
 }
 
-/// Index of the largest `(x, y, z) · d` (the last one on ties).
-fn argmax_projection([xs, ys, zs]: &[Vec<f32>; 3], d: &Vector3<f64>) -> usize {
-    let d = d.cast::<f32>();
-    let (mut best, mut best_at) = ([f32::NEG_INFINITY; LANES], [0u32; LANES]);
-    let blocks = xs
-        .chunks_exact(LANES)
-        .zip(ys.chunks_exact(LANES))
-        .zip(zs.chunks_exact(LANES));
-    for (b, ((x, y), z)) in blocks.enumerate() {
-        for l in 0..LANES {
-            let dot = x[l] * d.x + y[l] * d.y + z[l] * d.z;
-            let better = dot >= best[l];
-            best[l] = if better { dot } else { best[l] };
-            best_at[l] = if better { (b * LANES + l) as u32 } else { best_at[l] };
-        }
+/// Indices of the last copy of every distinct point, ascending.
+fn last_copies(points: &[Vector3<f64>]) -> Vec<usize> {
+    let mut last: HashMap<[u64; 3], usize> = HashMap::with_capacity(points.len());
+    for (i, p) in points.iter().enumerate() {
+        last.insert([p.x.to_bits(), p.y.to_bits(), p.z.to_bits()], i);
     }
-    let winner = (0..LANES).max_by(|&a, &b| best[a].total_cmp(&best[b]).then(best_at[a].cmp(&best_at[b])));
-    best_at[winner.expect("LANES > 0")] as usize
+    let mut kept: Vec<usize> = last.into_values().collect();
+    kept.sort_unstable();
+    kept
 }
 
 /// `n` nearly uniform unit vectors on the whole sphere.
@@ -394,5 +421,38 @@ mod tests {
             .map(|(x, y)| Vector2::new(x, y))
             .to_vec();
         assert_eq!(convex_hull_2d(pts).len(), 4);
+    }
+
+    #[test]
+    fn support_points_are_the_last_maxima_along_each_direction_however_often_points_repeat() {
+        // A cloud on a coarse grid (many exact ties between distinct points) with every point
+        // repeated up to three times, in shuffled order: the support set is each direction's
+        // last maximum, as a plain scan finds it.
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut points: Vec<Vector3<f64>> = (0..600)
+            .map(|_| Vector3::new(rng.random_range(0..6), rng.random_range(0..5), rng.random_range(0..4)).cast::<f64>() * 0.1)
+            .collect();
+        let copies: Vec<Vector3<f64>> = points.iter().take(400).copied().collect();
+        points.extend(copies.iter().take(200));
+        points.extend(copies);
+        for k in (1..points.len()).rev() {
+            points.swap(k, rng.random_range(0..=k));
+        }
+        let directions = fibonacci_sphere(300);
+        let naive: Vec<usize> = directions
+            .iter()
+            .map(|d| {
+                let d = d.cast::<f32>();
+                let dot = |p: &Vector3<f64>| p.x as f32 * d.x + p.y as f32 * d.y + p.z as f32 * d.z;
+                (0..points.len())
+                    .max_by(|&a, &b| dot(&points[a]).total_cmp(&dot(&points[b])).then(a.cmp(&b)))
+                    .expect("points")
+            })
+            .collect();
+        let mut naive = naive;
+        naive.sort_unstable();
+        naive.dedup();
+        let want: Vec<Vector3<f64>> = naive.into_iter().map(|i| points[i]).collect();
+        assert_eq!(support_points(&points, &directions), want);
     }
 }
