@@ -171,7 +171,13 @@ mod tests {
                 let n = 37;
                 let x: Vec<f32> = (0..n * ld).map(|i| ((i * 7919 % 113) as f32 - 56.0) / 17.0).collect();
                 let dy: Vec<f32> = (0..n * PANEL)
-                    .map(|i| if i % PANEL < out { ((i * 31 % 29) as f32 - 14.0) / 9.0 } else { 0.0 })
+                    .map(|i| {
+                        if i % PANEL < out {
+                            ((i * 31 % 29) as f32 - 14.0) / 9.0
+                        } else {
+                            0.0
+                        }
+                    })
                     .collect();
                 let start: Vec<f32> = (0..k * PANEL).map(|i| (i as f32 * 0.37).sin()).collect();
                 for &backend in &backends {
@@ -183,7 +189,11 @@ mod tests {
                     for kk in 0..k {
                         for o in 0..out {
                             let (g, w) = (got[kk * PANEL + o], want[kk * PANEL + o]);
-                            assert_eq!(g.to_bits(), w.to_bits(), "{backend:?} k {k} out {out}: [{kk}][{o}] {g} vs {w}");
+                            assert_eq!(
+                                g.to_bits(),
+                                w.to_bits(),
+                                "{backend:?} k {k} out {out}: [{kk}][{o}] {g} vs {w}"
+                            );
                         }
                         for o in out..PANEL {
                             assert_eq!(got[kk * PANEL + o], start[kk * PANEL + o], "padding untouched");

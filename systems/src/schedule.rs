@@ -8,10 +8,11 @@ use crate::stages::category_fields::{sync_category_fields, train_category_fields
 use crate::stages::cleanup::despawn_consumed_frames;
 use crate::stages::clouds::{accumulate_clouds, refresh_object_bounds};
 use crate::stages::ingest::ingest_frames;
+use crate::stages::log_camera::log_camera_frames;
 use crate::stages::log_categories::log_category_training;
 use crate::stages::log_rerun::{
-    Rerun, log_camera_frames, log_field_losses, log_field_meshes, log_instance_legend, log_memberships,
-    log_object_boxes, log_object_clouds,
+    Rerun, log_field_losses, log_field_meshes, log_instance_legend, log_memberships, log_object_boxes,
+    log_object_clouds,
 };
 use crate::stages::meshes::extract_preview_meshes;
 use crate::stages::register::register_categories;

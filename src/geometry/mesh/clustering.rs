@@ -103,14 +103,26 @@ mod tests {
             coarse.triangles.len(),
             fine.triangles.len()
         );
-        assert!(coarse.triangles.iter().all(|[a, b, c]| a != b && b != c && a != c), "no degenerate triangle");
+        assert!(
+            coarse.triangles.iter().all(|[a, b, c]| a != b && b != c && a != c),
+            "no degenerate triangle"
+        );
         let (fb, cb) = (fine.bounds().expect("fine"), coarse.bounds().expect("coarse"));
         for axis in 0..3 {
-            assert!((fb.min[axis] - cb.min[axis]).abs() <= 0.01, "min within a cell on axis {axis}");
-            assert!((fb.max[axis] - cb.max[axis]).abs() <= 0.01, "max within a cell on axis {axis}");
+            assert!(
+                (fb.min[axis] - cb.min[axis]).abs() <= 0.01,
+                "min within a cell on axis {axis}"
+            );
+            assert!(
+                (fb.max[axis] - cb.max[axis]).abs() <= 0.01,
+                "max within a cell on axis {axis}"
+            );
         }
         let area_ratio = coarse.area() / fine.area();
-        assert!((0.8..=1.05).contains(&area_ratio), "the surface stays: area ratio {area_ratio}");
+        assert!(
+            (0.8..=1.05).contains(&area_ratio),
+            "the surface stays: area ratio {area_ratio}"
+        );
         let colors = coarse.colors.as_ref().expect("colours kept");
         assert_eq!(colors.len(), coarse.vertices.len());
         assert_eq!(colors[0], [5, 100, 200], "mean colour of rows 0 and 1 (0 and 10)");

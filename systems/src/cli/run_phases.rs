@@ -138,7 +138,11 @@ impl PhaseBars {
 
     /// Shows `progress`, starting its phase's bar when the phase changed.
     fn show(&mut self, progress: RunProgress) {
-        if self.current.as_ref().is_none_or(|current| current.phase != progress.phase) {
+        if self
+            .current
+            .as_ref()
+            .is_none_or(|current| current.phase != progress.phase)
+        {
             self.finish();
             let cap = match progress.phase {
                 RunPhase::Stream => self.frames,

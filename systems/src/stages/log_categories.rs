@@ -18,7 +18,9 @@ pub fn log_category_training(rerun: Res<Rerun>, fields: Res<CategoryFields>, mem
         return;
     }
     rerun.0.set_time_sequence(CATEGORY_TIMELINE, fields.steps_done as i64);
-    rerun.0.set_time(paths::WALL_CLOCK_TIMELINE, std::time::SystemTime::now());
+    rerun
+        .0
+        .set_time(paths::WALL_CLOCK_TIMELINE, std::time::SystemTime::now());
     for (n, loss) in fields.ids.iter().zip(&fields.losses) {
         let path = paths::category_loss(*n);
         warn_on_error(

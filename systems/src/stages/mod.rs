@@ -12,7 +12,7 @@
 //! | classes are registered, subcategories split | `register` |
 //! | category fields follow the subcategories and train | `category_fields` |
 //! | fields are meshed (previews, final) | `meshes` |
-//! | what changed is logged to Rerun | `log_rerun`, `log_categories` |
+//! | what changed is logged to Rerun | `log_rerun`, `log_camera`, `log_categories` |
 //! | the frame's entity is despawned | `cleanup` |
 
 pub mod categorize;
@@ -20,6 +20,7 @@ pub mod category_fields;
 pub mod cleanup;
 pub mod clouds;
 pub mod ingest;
+pub mod log_camera;
 pub mod log_categories;
 pub mod log_rerun;
 pub mod meshes;

@@ -123,8 +123,14 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
     assert!(series("loss") >= 3, "field losses are logged: {paths:?}");
     assert!(series("steps") >= 3, "field steps are logged: {paths:?}");
     assert!(with_suffix("/mesh") >= 3, "preview meshes are logged: {paths:?}");
-    assert!(series("shape_code_norm") >= 2, "the members' code norms are logged: {paths:?}");
-    assert!(series("texture_code_norm") >= 2, "the members' code norms are logged: {paths:?}");
+    assert!(
+        series("shape_code_norm") >= 2,
+        "the members' code norms are logged: {paths:?}"
+    );
+    assert!(
+        series("texture_code_norm") >= 2,
+        "the members' code norms are logged: {paths:?}"
+    );
     assert!(
         paths.contains("training/loss/background"),
         "the background's loss is logged"
