@@ -6,10 +6,9 @@
 
 use std::ops::Range;
 
-use super::loss::{FieldLosses, LossNorm, ray_loss};
+use super::loss::{FieldLosses, LossNorm, ray_loss, solid_sample_loss};
 use super::render::{render_ray, render_ray_backward, sigmoid};
 use super::samples::RaySamples;
-use crate::objects::object_view::PixelState;
 
 /// α = ALPHA_SCALE · raw α head output (vMAP's "unisurf" scaling), in every network.
 pub const ALPHA_SCALE: f32 = 10.0;
@@ -120,7 +119,7 @@ impl HeadBuffers {
     pub(crate) fn colour_prefix(rays: &RaySamples, rays_range: Range<usize>) -> usize {
         let last = rays.states[rays_range]
             .iter()
-            .rposition(|s| *s != PixelState::OtherObject)
+            .rposition(|s| s.reads_colour())
             .map_or(0, |i| i + 1);
         last * rays.samples_per_ray
     }
@@ -141,6 +140,14 @@ impl HeadBuffers {
         self.d_colour[..n * HEAD_LD].fill(0.0);
         for (i, ray) in rays_range.enumerate() {
             let r = i * spr..(i + 1) * spr;
+            if let Some(target) = rays.states[ray].sample_target() {
+                for k in r {
+                    let (l, d_alpha) = solid_sample_loss(self.occ[k], target, norm);
+                    losses = losses.add(l);
+                    self.d_alpha[k * HEAD_LD] = flush_tiny(d_alpha);
+                }
+                continue;
+            }
             let (o, c, zr) = (&self.occ[r.clone()], &self.rgb[r.clone()], &z[r.clone()]);
             let render = render_ray(o, c, zr, &mut self.weights[r.clone()], &mut self.trans[r.clone()]);
             let (l, g) = ray_loss(&render, rays.depth_m[ray], rays.rgb[ray], rays.states[ray], norm);

@@ -10,6 +10,12 @@
 //! L = L_depth + 5 L_colour + 10 L_opacity          (the batch total is Σ over objects)
 //! ```
 //!
+//! Prior rays (`PixelState::HiddenSolid`, samples in cells of the object's box no view saw into,
+//! [`crate::objects::hidden_space`]) render nothing: each of their samples adds
+//! `L_solid = Σ_hidden −ln o / |hidden samples|`, weighted by the rays' `solid_weight`, asking it to
+//! be solid (the gradient of the raw α is `ALPHA_SCALE · (o − 1)`, which does not vanish where the
+//! field is empty).
+//!
 //! Each term is a **mean over its masked rays** (sum over RGB inside the colour term), computed
 //! per object and then summed over objects, exactly as vMAP's `reduce_batch_loss(avg=True)`.
 //! A term whose mask is empty is 0 for that object (vMAP zeroes the term for *every* object of
@@ -38,7 +44,10 @@ pub struct FieldLosses {
     pub colour: f32,
     /// L_opacity (before the ×10).
     pub opacity: f32,
-    /// L_depth + 5 L_colour + 10 L_opacity.
+    /// L_solid, the prior on samples no view saw into (before its weight; 0 without prior rays).
+    #[serde(default)]
+    pub solid: f32,
+    /// L_depth + 5 L_colour + 10 L_opacity + w L_solid.
     pub total: f32,
 }
 
@@ -49,6 +58,7 @@ impl FieldLosses {
             depth: self.depth + o.depth,
             colour: self.colour + o.colour,
             opacity: self.opacity + o.opacity,
+            solid: self.solid + o.solid,
             total: self.total + o.total,
         }
     }
@@ -60,23 +70,30 @@ pub struct LossNorm {
     depth: f32,
     colour: f32,
     opacity: f32,
+    /// Over the prior samples' count.
+    solid: f32,
+    /// The solid prior's weight.
+    solid_weight: f32,
 }
 
 impl LossNorm {
     /// Counts the masks of `rays`.
     pub(crate) fn of(rays: &RaySamples) -> Self {
-        let (mut nd, mut nc, mut no) = (0u32, 0u32, 0u32);
+        let (mut nd, mut nc, mut no, mut nh) = (0u32, 0u32, 0u32, 0u32);
         for (state, depth) in rays.states.iter().zip(&rays.depth_m) {
-            let obj = *state != PixelState::OtherObject;
+            let obj = state.reads_colour();
             nd += u32::from(obj && *depth > 0.0);
             nc += u32::from(obj);
-            no += u32::from(*state != PixelState::Unknown);
+            no += u32::from(state.opacity_target().is_some());
+            nh += u32::from(state.sample_target().is_some());
         }
         let inv = |n: u32| if n == 0 { 0.0 } else { 1.0 / (n as f32 + COUNT_EPS) };
         Self {
             depth: inv(nd),
             colour: inv(nc),
             opacity: inv(no),
+            solid: inv(nh * rays.samples_per_ray as u32),
+            solid_weight: rays.solid_weight,
         }
     }
 }
@@ -100,8 +117,7 @@ pub(crate) fn ray_loss(
     state: PixelState,
     norm: &LossNorm,
 ) -> (FieldLosses, RenderGrad) {
-    let obj = state != PixelState::OtherObject;
-    let known = state != PixelState::Unknown;
+    let obj = state.reads_colour();
     let mut losses = FieldLosses::default();
     let mut grad = RenderGrad::default();
     if obj && depth_m > 0.0 {
@@ -117,13 +133,30 @@ pub(crate) fn ray_loss(
             *g = COLOUR_WEIGHT * sign(res) * norm.colour;
         }
     }
-    if known {
-        let target = if state == PixelState::ThisObject { 1.0 } else { 0.0 };
+    if let Some(target) = state.opacity_target() {
         let res = r.opacity - target;
         losses.opacity = res.abs() * norm.opacity;
         grad.opacity = OPACITY_WEIGHT * sign(res) * norm.opacity;
     }
     losses.total = losses.depth + COLOUR_WEIGHT * losses.colour + OPACITY_WEIGHT * losses.opacity;
+    (losses, grad)
+}
+
+/// The smallest occupancy the solid prior's −ln o is taken of (a sample carved empty has o ≈ 0).
+const MIN_SOLID_OCCUPANCY: f32 = 1e-30;
+
+/// One prior sample's share of the losses (L_solid's −ln o / count, and its weighted share of
+/// the total) and the gradient of the total with respect to its raw α head output,
+/// `ALPHA_SCALE · (o − 1) · weight / count` (o = sigmoid(ALPHA_SCALE · raw)).
+pub(crate) fn solid_sample_loss(occupancy: f32, target: f32, norm: &LossNorm) -> (FieldLosses, f32) {
+    let agreeing = if target > 0.5 { occupancy } else { 1.0 - occupancy };
+    let solid = -agreeing.max(MIN_SOLID_OCCUPANCY).ln() * norm.solid;
+    let losses = FieldLosses {
+        solid,
+        total: norm.solid_weight * solid,
+        ..FieldLosses::default()
+    };
+    let grad = super::heads::ALPHA_SCALE * (occupancy - target) * norm.solid_weight * norm.solid;
     (losses, grad)
 }
 

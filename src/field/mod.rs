@@ -50,6 +50,7 @@ pub mod reference;
 mod render;
 mod samples;
 mod simd;
+mod solid_prior;
 mod tasks;
 mod tensors;
 
@@ -68,3 +69,4 @@ pub use ray_sampler::{RaySamplerConfig, choose_step_views, sample_training_rays,
 pub use render::{FREE_EPS, RayRender, RenderGrad, render_ray, render_ray_backward, sigmoid};
 pub use samples::RaySamples;
 pub use simd::Backend;
+pub use solid_prior::{PriorRays, append_prior_rays};

@@ -24,7 +24,9 @@ use serde::{Deserialize, Serialize};
 
 use super::free_space::{CarveCounts, carving_interval, ray_box_interval};
 use super::samples::RaySamples;
+use super::solid_prior::{PriorRays, append_prior_rays};
 use crate::geometry::oriented_box::OrientedBox;
+use crate::objects::hidden_space::{HiddenCells, HiddenSpaceCache};
 use crate::objects::keyframes::KeyframeWindow;
 use crate::objects::object_view::{ObjectView, PixelState};
 
@@ -48,6 +50,16 @@ pub struct RaySamplerConfig {
     pub surface_band_m: f32,
     /// How far behind an occluder's depth a ray of another object's pixel is sampled, metres.
     pub behind_occluder_m: f32,
+    /// Prior rays per step in the cells of the object's box that no view saw into, each sample
+    /// asked to be solid ([`crate::objects::hidden_space`]); 0: no solid prior.
+    pub hidden_solid_rays: usize,
+    /// Which hidden cells the solid prior draws from.
+    pub hidden_cells: HiddenCells,
+    /// Prior rays per step under the object's box, below the lowest point it was seen at, each
+    /// sample asked to be empty (what the object stands on); 0: none.
+    pub below_support_rays: usize,
+    /// Weight of the priors' loss (mean over their samples of −ln o, or −ln(1 − o) under the box).
+    pub hidden_solid_weight: f32,
 }
 
 impl RaySamplerConfig {
@@ -67,6 +79,10 @@ impl RaySamplerConfig {
         surface_samples: 9,
         surface_band_m: 0.1,
         behind_occluder_m: 0.05,
+        hidden_solid_rays: 0,
+        hidden_cells: HiddenCells::Enclosed,
+        below_support_rays: 0,
+        hidden_solid_weight: 1.0,
     };
 
     /// vMAP's background sampler: 5 keyframes × 240 pixels (1 200 rays), 5 + 9 samples per ray.
@@ -78,6 +94,10 @@ impl RaySamplerConfig {
         surface_samples: 9,
         surface_band_m: 0.1,
         behind_occluder_m: 0.05,
+        hidden_solid_rays: 0,
+        hidden_cells: HiddenCells::Enclosed,
+        below_support_rays: 0,
+        hidden_solid_weight: 1.0,
     };
 
     /// Samples per ray.
@@ -127,15 +147,31 @@ pub fn choose_step_views(len: usize, recent: &[usize], count: usize, rng: &mut i
 
 /// The rays of one training step of the field at `field_origin` whose views are `window`'s
 /// keyframes (its newest ones always take part; see [`sample_training_rays`]).
+/// With `hidden` (a cache and the box fitted to the object's observed cloud),
+/// `hidden_solid_rays` prior rays follow, drawn in the cells of that box no view saw into (the
+/// cache is brought up to date first).
 pub fn sample_window_rays(
     window: &KeyframeWindow<ObjectView>,
     field_origin: &Point3<f32>,
     object_box: Option<&OrientedBox>,
+    hidden: Option<(&mut HiddenSpaceCache, &OrientedBox)>,
     cfg: &RaySamplerConfig,
     rng: &mut impl Rng,
 ) -> RaySamples {
     let views: Vec<&ObjectView> = window.slots().iter().map(|s| &s.data).collect();
-    sample_training_rays(&views, window.recent_slots(), field_origin, object_box, cfg, rng)
+    let mut rays = sample_training_rays(&views, window.recent_slots(), field_origin, object_box, cfg, rng);
+    let counts = PriorRays {
+        hidden_solid: cfg.hidden_solid_rays,
+        below_support: cfg.below_support_rays,
+        weight: cfg.hidden_solid_weight,
+    };
+    if let Some((cache, fitted_box)) = hidden
+        && counts.hidden_solid + counts.below_support > 0
+    {
+        let space = cache.current(&views, fitted_box, cfg.hidden_cells);
+        append_prior_rays(&mut rays, space, counts, field_origin, rng);
+    }
+    rays
 }
 
 /// Draws one step's rays for one field from its keyframe `views` (`recent` = indices of the two
@@ -177,6 +213,7 @@ pub fn sample_training_rays(
         rgb: Vec::with_capacity(pixels.len()),
         states: Vec::with_capacity(pixels.len()),
         carve: CarveCounts::default(),
+        solid_weight: 0.0,
     };
     let mut z = Vec::with_capacity(s);
     for (v, du, dv) in pixels {
@@ -262,7 +299,8 @@ fn depths_along_ray(
             }
             z[start..].sort_by(f32::total_cmp);
         }
-        PixelState::OtherObject => {
+        // Views hold no prior rays; were one there, it would only teach free space.
+        PixelState::OtherObject | PixelState::HiddenSolid | PixelState::BelowSupport => {
             stratified(
                 (depth - band).max(0.0),
                 depth + cfg.behind_occluder_m,

@@ -155,6 +155,7 @@ fn box_samples_carve_the_part_of_each_ray_inside_the_box_before_the_surface() {
     let unboxed = draw_unboxed(&refs, &[0, 1], &RaySamplerConfig::OBJECT, 5);
     let vmap_uncounted = RaySamples {
         carve: CarveCounts::default(),
+        solid_weight: 0.0,
         ..vmap
     };
     assert_eq!(unboxed, vmap_uncounted, "no box: vMAP's sampler, the same draws");

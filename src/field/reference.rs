@@ -15,7 +15,6 @@ use super::loss::{COLOUR_WEIGHT, DEPTH_STD_EPS, OPACITY_WEIGHT};
 use super::render::FREE_EPS;
 use super::samples::RaySamples;
 use crate::error::{CatmapError, Result};
-use crate::objects::object_view::PixelState;
 
 pub(crate) fn ce(e: candle_core::Error) -> CatmapError {
     CatmapError::Degenerate(format!("candle: {e}"))
@@ -50,7 +49,7 @@ pub fn worst_tensor_error(layout: &ParamLayout, got: &[f32], want: &[f64]) -> (f
 /// Forward values and gradients of the reference occupancy model on one field's rays.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct ReferenceOutput {
-    /// Total loss L_depth + 5 L_colour + 10 L_opacity.
+    /// Total loss L_depth + 5 L_colour + 10 L_opacity + w L_solid.
     pub total: f64,
     /// L_depth.
     pub depth: f64,
@@ -58,6 +57,8 @@ pub struct ReferenceOutput {
     pub colour: f64,
     /// L_opacity.
     pub opacity: f64,
+    /// L_solid (prior samples, before its weight).
+    pub solid: f64,
     /// Rendered depth per ray.
     pub rendered_depth: Vec<f64>,
     /// Rendered colour per ray.
@@ -201,23 +202,23 @@ pub fn occupancy_reference(
             .detach();
         Ok((depth, rgb, opacity, var_z, w, trans, occ))
     };
-    let (depth, rgb, opacity, var_z, ..) = build()?;
+    let (depth, rgb, opacity, var_z, _, _, occ) = build()?;
 
     // Masks and targets.
     let obj: Vec<f64> = rays
         .states
         .iter()
-        .map(|s| f64::from(u8::from(*s != PixelState::OtherObject)))
+        .map(|s| f64::from(u8::from(s.reads_colour())))
         .collect();
     let known: Vec<f64> = rays
         .states
         .iter()
-        .map(|s| f64::from(u8::from(*s != PixelState::Unknown)))
+        .map(|s| f64::from(u8::from(s.opacity_target().is_some())))
         .collect();
     let this: Vec<f64> = rays
         .states
         .iter()
-        .map(|s| f64::from(u8::from(*s == PixelState::ThisObject)))
+        .map(|s| f64::from(u8::from(s.opacity_target() == Some(1.0))))
         .collect();
     let md: Vec<f64> = obj
         .iter()
@@ -256,8 +257,29 @@ pub fn occupancy_reference(
             .map_err(ce)?;
         mean(res.mul(&column(&known, dtype).map_err(ce)?).map_err(ce)?, &known)?
     };
-    let total = ((&l_depth + (&l_colour * f64::from(COLOUR_WEIGHT)).map_err(ce)?).map_err(ce)?
+    let l_solid = {
+        let mask_of = |target: f32| -> Vec<f64> {
+            rays.states
+                .iter()
+                .flat_map(|st| std::iter::repeat_n(f64::from(u8::from(st.sample_target() == Some(target))), s))
+                .collect()
+        };
+        let (solid, empty) = (mask_of(1.0), mask_of(0.0));
+        let prior: Vec<f64> = solid.iter().zip(&empty).map(|(a, b)| a + b).collect();
+        let tensor = |m: &[f64]| column(m, dtype).and_then(|m| m.reshape((r, s))).map_err(ce);
+        let (solid_mask, empty_mask) = (tensor(&solid)?, tensor(&empty)?);
+        let neg_ln_solid = occ.log().and_then(|x| x.neg()).and_then(|x| x.mul(&solid_mask)).map_err(ce)?;
+        let neg_ln_empty = (occ.neg().map_err(ce)? + 1.0)
+            .and_then(|x| x.log())
+            .and_then(|x| x.neg())
+            .and_then(|x| x.mul(&empty_mask))
+            .map_err(ce)?;
+        mean((neg_ln_solid + neg_ln_empty).map_err(ce)?, &prior)?
+    };
+    let total = (((&l_depth + (&l_colour * f64::from(COLOUR_WEIGHT)).map_err(ce)?).map_err(ce)?
         + (&l_opacity * f64::from(OPACITY_WEIGHT)).map_err(ce)?)
+    .map_err(ce)?
+        + (&l_solid * f64::from(rays.solid_weight)).map_err(ce)?)
     .map_err(ce)?;
     let scalar = |t: &Tensor| t.to_dtype(DType::F64).and_then(|t| t.to_scalar::<f64>()).map_err(ce);
     let vec1 = |t: &Tensor| t.to_dtype(DType::F64).and_then(|t| t.to_vec1::<f64>()).map_err(ce);
@@ -267,6 +289,7 @@ pub fn occupancy_reference(
         depth: scalar(&l_depth)?,
         colour: scalar(&l_colour)?,
         opacity: scalar(&l_opacity)?,
+        solid: scalar(&l_solid)?,
         rendered_depth: vec1(&depth)?,
         rendered_colour: rgb2.iter().map(|c| [c[0], c[1], c[2]]).collect(),
         rendered_opacity: vec1(&opacity)?,

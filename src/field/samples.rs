@@ -26,6 +26,8 @@ pub struct RaySamples {
     /// How many samples lie inside the object's box and how many of those carve free space
     /// (zero when the sampler was given no box).
     pub carve: CarveCounts,
+    /// Weight of the solid prior on the samples of `HiddenSolid` rays (see [`super::loss`]).
+    pub solid_weight: f32,
 }
 
 impl RaySamples {
@@ -68,7 +70,7 @@ impl RaySamples {
     /// unknown pixels) come first, each group in its original order. A training step then runs
     /// the colour branch on a prefix of each chunk only ([`super::heads`]).
     pub fn with_colour_rays_first(self) -> Self {
-        let reads_colour = |s: &PixelState| *s != PixelState::OtherObject;
+        let reads_colour = |s: &PixelState| s.reads_colour();
         if self.states.is_sorted_by_key(|s| !reads_colour(s)) {
             return self;
         }
@@ -89,6 +91,7 @@ impl RaySamples {
             rgb: order.iter().map(|&r| self.rgb[r]).collect(),
             states: order.iter().map(|&r| self.states[r]).collect(),
             carve: self.carve,
+            solid_weight: self.solid_weight,
         }
     }
 

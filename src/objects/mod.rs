@@ -3,6 +3,7 @@
 
 pub mod config;
 pub mod frame_observation;
+pub mod hidden_space;
 pub mod keyframes;
 pub mod object_bounds;
 pub mod object_view;

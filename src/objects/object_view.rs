@@ -18,6 +18,45 @@ pub enum PixelState {
     ThisObject,
     /// The segmentation does not know (ScanNet's unlabelled pixels).
     Unknown,
+    /// Not a pixel: a prior ray whose samples lie in cells of the object's box that no view saw
+    /// into ([`super::hidden_space`]); each sample is asked to be solid.
+    HiddenSolid,
+    /// Not a pixel: a prior ray whose samples lie under the object's box, below the lowest point
+    /// it was seen at (what it stands on); each sample is asked to be empty.
+    BelowSupport,
+}
+
+impl PixelState {
+    /// Whether the loss reads the ray's measured colour (and, with valid depth, its depth): the
+    /// object's own and unknown pixels.
+    pub fn reads_colour(self) -> bool {
+        matches!(self, Self::ThisObject | Self::Unknown)
+    }
+
+    /// The rendered opacity the loss asks of the ray, if it asks one: 1 on the object's pixels,
+    /// 0 on other objects' (free space up to them).
+    pub fn opacity_target(self) -> Option<f32> {
+        self.sample_target().map_or(self.ray_target(), |_| None)
+    }
+
+    /// The occupancy each sample of a prior ray is asked to have (1 solid, 0 empty); `None` for
+    /// rays of pixels.
+    pub fn sample_target(self) -> Option<f32> {
+        match self {
+            Self::HiddenSolid => Some(1.0),
+            Self::BelowSupport => Some(0.0),
+            Self::ThisObject | Self::OtherObject | Self::Unknown => None,
+        }
+    }
+
+    /// The rendered opacity asked of a pixel's ray.
+    fn ray_target(self) -> Option<f32> {
+        match self {
+            Self::ThisObject => Some(1.0),
+            Self::OtherObject => Some(0.0),
+            Self::Unknown | Self::HiddenSolid | Self::BelowSupport => None,
+        }
+    }
 }
 
 /// Whose view a crop is.

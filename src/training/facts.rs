@@ -90,6 +90,14 @@ impl MeshSource {
     pub fn of_category_member(is_member: bool) -> Self {
         if is_member { Self::CategoryField } else { Self::OwnField }
     }
+
+    /// Whether the object's field takes the priors of objects without a twin (the solid prior,
+    /// `objects::hidden_space`): only when its mesh comes from that field. A category field
+    /// completes its members from their twins; their own fields, which registration and the
+    /// uncertainty ranking read, stay the observations' alone.
+    pub fn takes_shape_priors(self) -> bool {
+        self == Self::OwnField
+    }
 }
 
 /// Whether frames are still streaming in.

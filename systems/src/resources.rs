@@ -155,6 +155,9 @@ pub struct Fields {
     pub background: catmap::field::FieldBatch,
     /// The background entity, once its field exists.
     pub background_owner: Option<Entity>,
+    /// Per object field (batch index), the cells of its box no view saw into, as last computed
+    /// (the solid prior's; derived from keyframes and box, so not checkpointed).
+    pub hidden_spaces: Vec<catmap::objects::hidden_space::HiddenSpaceCache>,
 }
 
 impl Fields {
@@ -165,6 +168,7 @@ impl Fields {
             object_owners: Vec::new(),
             background: catmap::field::FieldBatch::new(optimiser),
             background_owner: None,
+            hidden_spaces: Vec::new(),
         }
     }
 }

@@ -193,10 +193,10 @@ fn render_losses(occ: &Tensor, colour: &Tensor, rays: &RaySamples, dtype: DType)
             .map(|(st, d)| f64::from(u8::from(f(*st, *d))))
             .collect()
     };
-    let obj = mask(&|st, _| st != PixelState::OtherObject);
-    let known = mask(&|st, _| st != PixelState::Unknown);
-    let this = mask(&|st, _| st == PixelState::ThisObject);
-    let md = mask(&|st, d| st != PixelState::OtherObject && d > 0.0);
+    let obj = mask(&|st, _| st.reads_colour());
+    let known = mask(&|st, _| st.opacity_target().is_some());
+    let this = mask(&|st, _| st.opacity_target() == Some(1.0));
+    let md = mask(&|st, d| st.reads_colour() && d > 0.0);
     let mean = |masked: Tensor, mask: &[f64]| -> CResult<Tensor> {
         let count: f64 = mask.iter().sum();
         let factor = if count == 0.0 { 0.0 } else { 1.0 / (count + 1e-10) };

@@ -118,6 +118,7 @@ fn sample_members(
                 &keyframes.0,
                 &field_slot.origin,
                 Some(&meshing.meshed_box(&slot.0.nocs.oriented_box())),
+                None,
                 &rays[slot.field],
                 &mut rng.0,
             ),

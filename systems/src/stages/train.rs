@@ -12,6 +12,7 @@ use rayon::prelude::*;
 
 use catmap::FrameIndex;
 use catmap::meshing::ObjectMeshConfig;
+use catmap::objects::hidden_space::HiddenSpaceCache;
 use catmap::training::{BatchPlan, FieldFacts, MeshSource, StreamPhase, object_field_facts};
 
 use crate::components::{
@@ -138,14 +139,14 @@ pub fn train_fields(
                 &mut owners,
                 FieldOwner::Objects,
                 &plan,
-                &mut fields.objects,
+                (&mut fields.objects, &mut fields.hidden_spaces),
                 &object_rays,
                 &config.meshes.object,
             );
             schedule.record_step(&plan.keys, step, &config.schedule.plateau, "object");
         }
         if cfg.background_due(queue.steps_done) && !fields.background.is_empty() {
-            let (plan, batch) = (BatchPlan::background(), &mut fields.background);
+            let (plan, batch) = (BatchPlan::background(), (&mut fields.background, &mut Vec::new()));
             let (rays, meshing) = (&cfg.background_rays, &config.meshes.object);
             if let Err(e) = train_one(&mut owners, FieldOwner::Background, &plan, batch, rays, meshing) {
                 tracing::warn!(error = %e, "background training step skipped");
@@ -170,12 +171,13 @@ fn object_facts(owners: &FieldOwners, phase: StreamPhase, tick: &[FrameIndex]) -
 /// One step of the fields `plan` names (ascending indices in `batch`; learning rates scaled by
 /// its factors): samples their owners' rays (the background's, or the objects', carving the
 /// region each object is meshed in) in parallel, trains, and records each owner's losses and
-/// carving counts; returns their total losses, in index order.
+/// carving counts; returns their total losses, in index order. `hidden` keeps, per batch index,
+/// the cells of each object's box no view saw into (the solid prior's; empty for the background).
 fn train_one(
     owners: &mut FieldOwners,
     owner: FieldOwner,
     plan: &BatchPlan,
-    batch: &mut catmap::field::FieldBatch,
+    (batch, hidden): (&mut catmap::field::FieldBatch, &mut Vec<HiddenSpaceCache>),
     rays: &RaySamplerConfig,
     meshing: &ObjectMeshConfig,
 ) -> catmap::Result<Vec<f32>> {
@@ -186,9 +188,11 @@ fn train_one(
         .filter(|(is_background, .., slot, _, _)| {
             *is_background == background && indices.binary_search(&slot.index).is_ok()
         })
-        .map(|(_, _, _, _, bounds, keyframes, slot, rng, loss)| {
+        .map(|(_, _, _, member, bounds, keyframes, slot, rng, loss)| {
             let object_box = bounds.map(|b| meshing.meshed_box(&b.oriented_box));
-            (keyframes, slot, rng, loss, object_box)
+            let priors = MeshSource::of_category_member(member).takes_shape_priors();
+            let fitted_box = bounds.filter(|_| priors).map(|b| b.oriented_box);
+            (keyframes, slot, rng, loss, (object_box, fitted_box))
         })
         .collect();
     work.sort_by_key(|(_, slot, ..)| slot.index);
@@ -199,10 +203,17 @@ fn train_one(
             batch.len()
         )));
     }
+    if !background && hidden.len() < batch.len() {
+        hidden.resize_with(batch.len(), HiddenSpaceCache::default);
+    }
+    let mut caches: Vec<Option<&mut HiddenSpaceCache>> = hidden.iter_mut().map(Some).collect();
+    let mut work_caches: Vec<_> = owned.iter().map(|&i| caches.get_mut(i).and_then(Option::take)).collect();
     let fields: Vec<RaySamples> = work
         .par_iter_mut()
-        .map(|(keyframes, slot, rng, _, object_box)| {
-            sample_window_rays(&keyframes.0, &slot.origin, object_box.as_ref(), rays, &mut rng.0)
+        .zip(work_caches.par_iter_mut())
+        .map(|((keyframes, slot, rng, _, (object_box, fitted_box)), cache)| {
+            let hidden = cache.as_deref_mut().zip(fitted_box.as_ref());
+            sample_window_rays(&keyframes.0, &slot.origin, object_box.as_ref(), hidden, rays, &mut rng.0)
         })
         .collect();
     let losses = batch.train_step_scaled(indices, &plan.learning_rate_scales, &fields)?;

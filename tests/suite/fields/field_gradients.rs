@@ -60,7 +60,10 @@ fn check_samples_against_candle(batch: &mut FieldBatch, samples: &[RaySamples], 
             reference.total
         );
         assert!(
-            close(l.depth, reference.depth) && close(l.colour, reference.colour) && close(l.opacity, reference.opacity),
+            close(l.depth, reference.depth)
+                && close(l.colour, reference.colour)
+                && close(l.opacity, reference.opacity)
+                && close(l.solid, reference.solid),
             "field {f}: loss terms {l:?} vs {reference:?}"
         );
         let (rel, name) = worst_tensor_error(&field.layout(), &grads[f], &reference.grad);
@@ -96,6 +99,30 @@ fn rays_of_other_objects_last_skip_the_colour_branch_and_keep_the_gradients() {
             "a whole chunk of other rays at the end"
         );
         check_samples_against_candle(&mut batch, &ordered, backend);
+    }
+}
+
+#[test]
+fn prior_rays_of_the_solid_and_support_priors_match_candle_autograd() {
+    // The step's rays as the sampler returns them with priors: pixel rays, then rays whose
+    // samples are asked to be solid (hidden cells) or empty (under the box), weighted 0.7.
+    for backend in [Backend::detect(), Backend::Scalar] {
+        let (mut batch, samples) = setup(7, &[32, 32], 30, 10, backend);
+        let with_priors: Vec<RaySamples> = samples
+            .into_iter()
+            .map(|mut s| {
+                let n = s.num_rays();
+                for (r, state) in s.states.iter_mut().enumerate().skip(n - 12) {
+                    *state = if r % 3 == 0 { PixelState::BelowSupport } else { PixelState::HiddenSolid };
+                }
+                s.depth_m[n - 12..].fill(0.0);
+                s.solid_weight = 0.7;
+                s.with_colour_rays_first()
+            })
+            .collect();
+        check_samples_against_candle(&mut batch, &with_priors, backend);
+        let (losses, _) = batch.loss_and_gradients(&with_priors).expect("shapes agree");
+        assert!(losses.iter().all(|l| l.solid > 0.0), "the prior's term counts: {losses:?}");
     }
 }
 

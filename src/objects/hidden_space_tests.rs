@@ -1,0 +1,251 @@
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+
+use super::*;
+use crate::field::free_space::ray_box_interval;
+use crate::ids::FrameIndex;
+use crate::rng::{RngStream, seeded_rng};
+use crate::sensor::frame::CameraIntrinsics;
+use crate::sensor::pixel_box::PixelBox;
+use crate::synth::trajectory::look_rotation;
+
+/// An axis-aligned box of the constructed scene, and whether it is the object.
+struct Solid {
+    aabb: OrientedBox,
+    is_object: bool,
+}
+
+fn aabb(min: [f32; 3], max: [f32; 3]) -> OrientedBox {
+    let (min, max) = (Vector3::from(min), Vector3::from(max));
+    OrientedBox {
+        world_from_box: Isometry3::from_parts(Translation3::from((min + max) / 2.0), UnitQuaternion::identity()),
+        half_extents: (max - min) / 2.0,
+    }
+}
+
+/// A 96×96 view from `eye` looking along yaw `yaw` (level) of `scene` inside a room whose
+/// walls are 5 m away (background): every pixel gets the depth of the nearest hit.
+fn render(eye: [f32; 3], yaw: f32, scene: &[Solid]) -> ObjectView {
+    render_pitched(eye, yaw, 0.0, scene)
+}
+
+/// [`render`] looking up by `pitch` (down when negative).
+fn render_pitched(eye: [f32; 3], yaw: f32, pitch: f32, scene: &[Solid]) -> ObjectView {
+    let k = CameraIntrinsics {
+        width: 96,
+        height: 96,
+        fx: 60.0,
+        fy: 60.0,
+        cx: 47.5,
+        cy: 47.5,
+    };
+    let pose = Isometry3::from_parts(Translation3::from(Vector3::from(eye)), look_rotation(yaw, pitch));
+    let (mut depth_m, mut states) = (Vec::new(), Vec::new());
+    for v in 0..k.height {
+        for u in 0..k.width {
+            let dir = pose.rotation * k.ray_in_camera(u as f32, v as f32);
+            let origin = Point3::from(Vector3::from(eye));
+            let hit = scene
+                .iter()
+                .filter_map(|s| ray_box_interval(&s.aabb, &origin, &dir).map(|(t, _)| (t, s.is_object)))
+                .filter(|(t, _)| *t > 0.0)
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let (d, state) = match hit {
+                Some((t, true)) => (t, PixelState::ThisObject),
+                Some((t, false)) => (t, PixelState::OtherObject),
+                None => (5.0, PixelState::OtherObject),
+            };
+            depth_m.push(d);
+            states.push(state);
+        }
+    }
+    ObjectView {
+        frame: FrameIndex(0),
+        world_from_camera: pose,
+        intrinsics: k,
+        region: PixelBox {
+            u_min: 0,
+            v_min: 0,
+            u_max: k.width - 1,
+            v_max: k.height - 1,
+        },
+        rgb: vec![[0; 3]; depth_m.len()],
+        depth_m,
+        states,
+    }
+}
+
+/// The object: a slab 5 cm thick facing −y at y = 1 (its front), in a box 40 cm deep behind it.
+fn slab_and_box() -> (Vec<Solid>, OrientedBox) {
+    let slab = Solid {
+        aabb: aabb([-0.2, 1.0, 0.0], [0.2, 1.05, 0.4]),
+        is_object: true,
+    };
+    (vec![slab], aabb([-0.2, 1.0, 0.0], [0.2, 1.4, 0.4]))
+}
+
+#[test]
+fn cells_behind_the_seen_face_are_hidden_and_cells_seen_through_are_not() {
+    let (scene, object_box) = slab_and_box();
+    // Seen from the front only: everything behind the slab is hidden.
+    let front = render([0.0, -1.0, 0.2], 0.0, &scene);
+    let margin = 0.03;
+    let behind = Point3::new(0.0, 1.3, 0.2);
+    assert_eq!(cell_evidence(&[&front], &behind, margin), CellEvidence::Hidden);
+    // In front of the slab the ray is free.
+    assert_eq!(
+        cell_evidence(&[&front], &Point3::new(0.0, 0.9, 0.2), margin),
+        CellEvidence::SeenFree
+    );
+    let only_front = HiddenSpace::of_views(&[&front], &object_box, HiddenCells::All);
+    assert!(only_front.hidden_share() > 0.8, "{}", only_front.hidden_share());
+    // A side view sees the slab's edge and the room through the rest of the box: the cells
+    // behind the slab are seen free, only the slab's own cells stay hidden.
+    let side = render([2.0, 1.2, 0.2], -std::f32::consts::FRAC_PI_2, &scene);
+    assert_eq!(cell_evidence(&[&front, &side], &behind, margin), CellEvidence::SeenFree);
+    let both = HiddenSpace::of_views(&[&front, &side], &object_box, HiddenCells::All);
+    assert!(both.hidden_share() < 0.2, "{}", both.hidden_share());
+    for c in &both.centres {
+        let world = both.world_from_box * c;
+        assert!(world.y < 1.1, "a hidden cell at {world} lies behind the slab, where the side view saw through");
+    }
+}
+
+#[test]
+fn cells_behind_another_object_are_not_hidden() {
+    // The same slab hidden behind a wall that is not the object: nothing is behind *its* surface.
+    let (mut scene, object_box) = slab_and_box();
+    scene.push(Solid {
+        aabb: aabb([-1.0, 0.5, -0.5], [1.0, 0.55, 1.0]),
+        is_object: false,
+    });
+    let front = render([0.0, -1.0, 0.2], 0.0, &scene);
+    let space = HiddenSpace::of_views(&[&front], &object_box, HiddenCells::All);
+    assert!(space.centres.is_empty(), "{} hidden cells", space.centres.len());
+    assert!(space.draw(&mut seeded_rng(0, RngStream::Mapper)).is_none());
+}
+
+#[test]
+fn drawn_points_lie_in_hidden_cells() {
+    let (scene, object_box) = slab_and_box();
+    let front = render([0.0, -1.0, 0.2], 0.0, &scene);
+    let space = HiddenSpace::of_views(&[&front], &object_box, HiddenCells::All);
+    let mut rng = seeded_rng(3, RngStream::Mapper);
+    for _ in 0..200 {
+        let p = space.draw(&mut rng).expect("hidden cells");
+        assert!(object_box.contains(&p, 1e-5), "{p} outside the box");
+        assert!(p.y > 1.0, "{p} in front of the slab's face");
+    }
+}
+
+#[test]
+fn a_cell_behind_another_object_in_one_view_is_not_hidden_by_another() {
+    // A tabletop (the object) with a block (another object) under its front edge. From above,
+    // a point under the top lies behind the top; from the front, low, behind the block: the
+    // views disagree on what hides it, so it may be empty and is not hidden.
+    let scene = [
+        Solid {
+            aabb: aabb([-0.5, 1.0, 0.7], [0.5, 2.0, 0.75]),
+            is_object: true,
+        },
+        Solid {
+            aabb: aabb([-0.3, 0.9, 0.0], [0.3, 1.2, 0.45]),
+            is_object: false,
+        },
+    ];
+    let under_top = Point3::new(0.0, 1.4, 0.3);
+    let above = render_pitched([0.0, 1.5, 2.5], 0.0, -1.45, &scene);
+    let front = render([0.0, -1.0, 0.3], 0.0, &scene);
+    let margin = 0.03;
+    assert_eq!(cell_evidence(&[&above], &under_top, margin), CellEvidence::Hidden);
+    assert_eq!(cell_evidence(&[&front], &under_top, margin), CellEvidence::Occluded);
+    assert_eq!(cell_evidence(&[&above, &front], &under_top, margin), CellEvidence::Occluded);
+}
+
+#[test]
+fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
+    // A table (the object): a top, and an apron hanging down to 30 cm along its front edge and
+    // the front half of its +x side. From above the space under the top lies behind the top;
+    // from the front, low, behind the apron; from the +x side, low, the view sees under the top
+    // through the back half, and the front half lies behind the side apron.
+    let scene = [
+        Solid {
+            aabb: aabb([-0.5, 1.0, 0.7], [0.5, 2.0, 0.75]),
+            is_object: true,
+        },
+        Solid {
+            aabb: aabb([-0.5, 1.0, 0.3], [0.5, 1.02, 0.7]),
+            is_object: true,
+        },
+        Solid {
+            aabb: aabb([0.48, 1.0, 0.3], [0.5, 1.5, 0.7]),
+            is_object: true,
+        },
+    ];
+    let object_box = aabb([-0.5, 1.0, 0.0], [0.5, 2.0, 0.75]);
+    let above = render_pitched([0.0, 1.5, 2.5], 0.0, -1.45, &scene);
+    let low = render([0.0, -1.0, 0.1], 0.0, &scene);
+    let side = render([2.5, 1.5, 0.1], -std::f32::consts::FRAC_PI_2, &scene);
+    let views = [&above, &low, &side];
+    assert_eq!(
+        cell_evidence(&views, &Point3::new(0.0, 1.5, 0.1), 0.03),
+        CellEvidence::SeenFree
+    );
+    assert_eq!(
+        cell_evidence(&[&above, &low], &Point3::new(0.0, 1.5, 0.5), 0.03),
+        CellEvidence::Hidden
+    );
+    let under_top = |space: &HiddenSpace| {
+        let world = space.centres.iter().map(|c| space.world_from_box * c);
+        world.filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y)).count()
+    };
+    let all = HiddenSpace::of_views(&views, &object_box, HiddenCells::All);
+    let enclosed = HiddenSpace::of_views(&views, &object_box, HiddenCells::Enclosed);
+    assert!(under_top(&all) > 50, "{} hidden cells under the top", under_top(&all));
+    assert_eq!(under_top(&enclosed), 0, "cells open sideways onto seen-free space are not asked to be solid");
+    // Seen from the front and above only, the space under the top is enclosed: the apron in
+    // front, the box's faces elsewhere.
+    let closed = HiddenSpace::of_views(&[&above, &low], &object_box, HiddenCells::Enclosed);
+    assert!(under_top(&closed) > 50, "{} enclosed cells under the top", under_top(&closed));
+}
+
+#[test]
+fn space_under_an_overhang_that_opens_onto_occluded_space_is_not_enclosed() {
+    // The table of the test above with a cabinet (another object) filling the back half of the
+    // space under its top: from the +x side that half lies behind the cabinet, the front half
+    // behind the side apron. The front half opens onto space that may be empty.
+    let scene = [
+        Solid {
+            aabb: aabb([-0.5, 1.0, 0.7], [0.5, 2.0, 0.75]),
+            is_object: true,
+        },
+        Solid {
+            aabb: aabb([-0.5, 1.0, 0.3], [0.5, 1.02, 0.7]),
+            is_object: true,
+        },
+        Solid {
+            aabb: aabb([0.48, 1.0, 0.3], [0.5, 1.5, 0.7]),
+            is_object: true,
+        },
+        Solid {
+            aabb: aabb([-0.5, 1.55, 0.0], [0.5, 1.95, 0.69]),
+            is_object: false,
+        },
+    ];
+    let object_box = aabb([-0.5, 1.0, 0.0], [0.5, 2.0, 0.75]);
+    let above = render_pitched([0.0, 1.5, 2.5], 0.0, -1.45, &scene);
+    let low = render([0.0, -1.0, 0.1], 0.0, &scene);
+    let side = render([2.5, 1.5, 0.1], -std::f32::consts::FRAC_PI_2, &scene);
+    let views = [&above, &low, &side];
+    assert_eq!(
+        cell_evidence(&views, &Point3::new(0.0, 1.75, 0.4), 0.03),
+        CellEvidence::Occluded
+    );
+    let front_half = |space: &HiddenSpace| {
+        let world = space.centres.iter().map(|c| space.world_from_box * c);
+        world.filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y)).count()
+    };
+    let all = HiddenSpace::of_views(&views, &object_box, HiddenCells::All);
+    let enclosed = HiddenSpace::of_views(&views, &object_box, HiddenCells::Enclosed);
+    assert!(front_half(&all) > 50, "{} hidden cells in the front half", front_half(&all));
+    assert_eq!(front_half(&enclosed), 0);
+}
