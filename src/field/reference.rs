@@ -268,7 +268,11 @@ pub fn occupancy_reference(
         let prior: Vec<f64> = solid.iter().zip(&empty).map(|(a, b)| a + b).collect();
         let tensor = |m: &[f64]| column(m, dtype).and_then(|m| m.reshape((r, s))).map_err(ce);
         let (solid_mask, empty_mask) = (tensor(&solid)?, tensor(&empty)?);
-        let neg_ln_solid = occ.log().and_then(|x| x.neg()).and_then(|x| x.mul(&solid_mask)).map_err(ce)?;
+        let neg_ln_solid = occ
+            .log()
+            .and_then(|x| x.neg())
+            .and_then(|x| x.mul(&solid_mask))
+            .map_err(ce)?;
         let neg_ln_empty = (occ.neg().map_err(ce)? + 1.0)
             .and_then(|x| x.log())
             .and_then(|x| x.neg())

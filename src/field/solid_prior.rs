@@ -31,7 +31,11 @@ pub fn append_prior_rays(
     field_origin: &Point3<f32>,
     rng: &mut impl Rng,
 ) {
-    let solid = if hidden.centres.is_empty() { 0 } else { counts.hidden_solid };
+    let solid = if hidden.centres.is_empty() {
+        0
+    } else {
+        counts.hidden_solid
+    };
     if solid + counts.below_support == 0 {
         return;
     }
@@ -81,7 +85,13 @@ mod tests {
             below_support: 2,
             weight: 0.5,
         };
-        append_prior_rays(&mut rays, &hidden, counts, &origin, &mut seeded_rng(1, RngStream::Mapper));
+        append_prior_rays(
+            &mut rays,
+            &hidden,
+            counts,
+            &origin,
+            &mut seeded_rng(1, RngStream::Mapper),
+        );
         rays.validate().expect("consistent arrays");
         assert_eq!((rays.num_rays(), rays.solid_weight), (5, 0.5));
         for (ray, state) in rays.states.iter().enumerate() {

@@ -10,17 +10,20 @@
 //!
 //! The box is divided into [`CELLS_PER_AXIS`]³ cells. Each cell centre is projected into every
 //! keyframe crop of the object; at the pixel it lands on (measured depth d, the centre's camera
-//! depth z, `m` the cell's half diagonal):
-//! - z < d − m: a ray passed through the cell before its surface — the cell is **seen free**;
-//! - the pixel shows this object and z > d + m: the cell is **behind the object's surface**.
+//! depth z, `m` the cell's half diagonal) the view says:
+//! - z < d − m: a ray passed through the cell before its surface — **free**;
+//! - |z − d| ≤ m on the object's pixel: the cell is **at the object's surface**;
+//! - z > d + m on the object's pixel: **behind the object's surface**;
+//! - z > d + m on another object's (or the background's) pixel: **behind another surface** — the
+//!   floor under the object, a chair under a table's top: it may be empty.
 //!
-//! - another object's (or the background's) pixel and z > d + m: the cell is **behind another
-//!   surface** — the floor under the object, a chair under a table's top: it may be empty.
-//!
-//! A cell behind the object's surface in at least one view, and seen free or behind another
-//! surface in none, is hidden. Cells that project outside a crop or onto invalid depth learn
-//! nothing from that view. The box is the one fitted to the observed cloud (not the larger
-//! region the object is meshed in): its faces are where the object was seen to end.
+//! Over all views a cell is, in this order of precedence: seen free (free in one view), occluded
+//! (behind another surface in one), surface, hidden (behind the object's surface in one), or
+//! unknown. Cells that project outside a crop or onto invalid depth learn nothing from that view.
+//! The box is the one fitted to the observed cloud (not the larger region the object is meshed
+//! in): its faces are where the object was seen to end. Which hidden cells the prior takes is
+//! [`HiddenCells`]' choice; the support prior's samples lie under the box
+//! ([`HiddenSpace::draw_below_support`]).
 
 use nalgebra::{Isometry3, Point3, Vector3};
 use rand::{Rng, RngExt};
@@ -213,7 +216,9 @@ impl HiddenSpace {
                 for i in 0..n {
                     let kept = match rule {
                         HiddenCells::All => grid.at(i, j, k) == CellEvidence::Hidden,
-                        HiddenCells::Enclosed => grid.at(i, j, k) == CellEvidence::Hidden && !grid.open_sideways(i, j, k),
+                        HiddenCells::Enclosed => {
+                            grid.at(i, j, k) == CellEvidence::Hidden && !grid.open_sideways(i, j, k)
+                        }
                     };
                     if kept {
                         centres.push(centre_of(i, j, k));
@@ -279,7 +284,8 @@ impl HiddenSpaceCache {
             self.space = Some(HiddenSpace::of_views(views, object_box, rule));
             self.key = Some(key);
         }
-        self.space.get_or_insert_with(|| HiddenSpace::of_views(views, object_box, rule))
+        self.space
+            .get_or_insert_with(|| HiddenSpace::of_views(views, object_box, rule))
     }
 }
 

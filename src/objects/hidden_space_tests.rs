@@ -106,7 +106,10 @@ fn cells_behind_the_seen_face_are_hidden_and_cells_seen_through_are_not() {
     assert!(both.hidden_share() < 0.2, "{}", both.hidden_share());
     for c in &both.centres {
         let world = both.world_from_box * c;
-        assert!(world.y < 1.1, "a hidden cell at {world} lies behind the slab, where the side view saw through");
+        assert!(
+            world.y < 1.1,
+            "a hidden cell at {world} lies behind the slab, where the side view saw through"
+        );
     }
 }
 
@@ -158,7 +161,10 @@ fn a_cell_behind_another_object_in_one_view_is_not_hidden_by_another() {
     let margin = 0.03;
     assert_eq!(cell_evidence(&[&above], &under_top, margin), CellEvidence::Hidden);
     assert_eq!(cell_evidence(&[&front], &under_top, margin), CellEvidence::Occluded);
-    assert_eq!(cell_evidence(&[&above, &front], &under_top, margin), CellEvidence::Occluded);
+    assert_eq!(
+        cell_evidence(&[&above, &front], &under_top, margin),
+        CellEvidence::Occluded
+    );
 }
 
 #[test]
@@ -196,16 +202,26 @@ fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
     );
     let under_top = |space: &HiddenSpace| {
         let world = space.centres.iter().map(|c| space.world_from_box * c);
-        world.filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y)).count()
+        world
+            .filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y))
+            .count()
     };
     let all = HiddenSpace::of_views(&views, &object_box, HiddenCells::All);
     let enclosed = HiddenSpace::of_views(&views, &object_box, HiddenCells::Enclosed);
     assert!(under_top(&all) > 50, "{} hidden cells under the top", under_top(&all));
-    assert_eq!(under_top(&enclosed), 0, "cells open sideways onto seen-free space are not asked to be solid");
+    assert_eq!(
+        under_top(&enclosed),
+        0,
+        "cells open sideways onto seen-free space are not asked to be solid"
+    );
     // Seen from the front and above only, the space under the top is enclosed: the apron in
     // front, the box's faces elsewhere.
     let closed = HiddenSpace::of_views(&[&above, &low], &object_box, HiddenCells::Enclosed);
-    assert!(under_top(&closed) > 50, "{} enclosed cells under the top", under_top(&closed));
+    assert!(
+        under_top(&closed) > 50,
+        "{} enclosed cells under the top",
+        under_top(&closed)
+    );
 }
 
 #[test]
@@ -242,10 +258,16 @@ fn space_under_an_overhang_that_opens_onto_occluded_space_is_not_enclosed() {
     );
     let front_half = |space: &HiddenSpace| {
         let world = space.centres.iter().map(|c| space.world_from_box * c);
-        world.filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y)).count()
+        world
+            .filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y))
+            .count()
     };
     let all = HiddenSpace::of_views(&views, &object_box, HiddenCells::All);
     let enclosed = HiddenSpace::of_views(&views, &object_box, HiddenCells::Enclosed);
-    assert!(front_half(&all) > 50, "{} hidden cells in the front half", front_half(&all));
+    assert!(
+        front_half(&all) > 50,
+        "{} hidden cells in the front half",
+        front_half(&all)
+    );
     assert_eq!(front_half(&enclosed), 0);
 }

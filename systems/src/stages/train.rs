@@ -207,13 +207,23 @@ fn train_one(
         hidden.resize_with(batch.len(), HiddenSpaceCache::default);
     }
     let mut caches: Vec<Option<&mut HiddenSpaceCache>> = hidden.iter_mut().map(Some).collect();
-    let mut work_caches: Vec<_> = owned.iter().map(|&i| caches.get_mut(i).and_then(Option::take)).collect();
+    let mut work_caches: Vec<_> = owned
+        .iter()
+        .map(|&i| caches.get_mut(i).and_then(Option::take))
+        .collect();
     let fields: Vec<RaySamples> = work
         .par_iter_mut()
         .zip(work_caches.par_iter_mut())
         .map(|((keyframes, slot, rng, _, (object_box, fitted_box)), cache)| {
             let hidden = cache.as_deref_mut().zip(fitted_box.as_ref());
-            sample_window_rays(&keyframes.0, &slot.origin, object_box.as_ref(), hidden, rays, &mut rng.0)
+            sample_window_rays(
+                &keyframes.0,
+                &slot.origin,
+                object_box.as_ref(),
+                hidden,
+                rays,
+                &mut rng.0,
+            )
         })
         .collect();
     let losses = batch.train_step_scaled(indices, &plan.learning_rate_scales, &fields)?;

@@ -113,7 +113,11 @@ fn prior_rays_of_the_solid_and_support_priors_match_candle_autograd() {
             .map(|mut s| {
                 let n = s.num_rays();
                 for (r, state) in s.states.iter_mut().enumerate().skip(n - 12) {
-                    *state = if r % 3 == 0 { PixelState::BelowSupport } else { PixelState::HiddenSolid };
+                    *state = if r % 3 == 0 {
+                        PixelState::BelowSupport
+                    } else {
+                        PixelState::HiddenSolid
+                    };
                 }
                 s.depth_m[n - 12..].fill(0.0);
                 s.solid_weight = 0.7;
@@ -122,7 +126,10 @@ fn prior_rays_of_the_solid_and_support_priors_match_candle_autograd() {
             .collect();
         check_samples_against_candle(&mut batch, &with_priors, backend);
         let (losses, _) = batch.loss_and_gradients(&with_priors).expect("shapes agree");
-        assert!(losses.iter().all(|l| l.solid > 0.0), "the prior's term counts: {losses:?}");
+        assert!(
+            losses.iter().all(|l| l.solid > 0.0),
+            "the prior's term counts: {losses:?}"
+        );
     }
 }
 

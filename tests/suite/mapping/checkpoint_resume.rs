@@ -1,6 +1,7 @@
 //! Checkpoints: a mapper saved, dropped and restored four times — after the first frame, mid-stream,
 //! during the training after the stream, during the category phase — ends with the same final
-//! meshes, categories and map as a run that was never interrupted (bit for bit).
+//! meshes, categories and map as a run that was never interrupted (bit for bit), the solid and
+//! support priors on.
 
 use std::ops::ControlFlow;
 use std::sync::Arc;
@@ -45,6 +46,10 @@ fn config() -> MapperConfig {
     config.category_fields.iterations = 60;
     config.meshes.object.voxel_size_m = 0.04;
     config.meshes.background_voxel_m = 0.1;
+    // The priors of objects without a twin, whose hidden cells are not checkpointed but
+    // recomputed from the restored keyframes and boxes.
+    config.fields.object_rays.hidden_solid_rays = 4;
+    config.fields.object_rays.below_support_rays = 2;
     config
 }
 
