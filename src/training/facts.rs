@@ -2,6 +2,8 @@
 //! ([`FieldKey`]), what it is for ([`FieldRole`]), what this tick's frames showed of it
 //! ([`Sighting`]) and whether frames still stream in ([`StreamPhase`]).
 
+use std::collections::HashMap;
+
 use serde::{Deserialize, Serialize};
 
 use crate::ids::{FrameIndex, ObjectId};
@@ -90,14 +92,23 @@ impl MeshSource {
     pub fn of_category_member(is_member: bool) -> Self {
         if is_member { Self::CategoryField } else { Self::OwnField }
     }
+}
 
-    /// Whether the object's field takes the priors of objects without a twin (the solid prior,
-    /// `objects::hidden_space`): only when its mesh comes from that field. A category field
-    /// completes its members from their twins; their own fields, which registration and the
-    /// uncertainty ranking read, stay the observations' alone.
-    pub fn takes_shape_priors(self) -> bool {
-        self == Self::OwnField
-    }
+/// Whether an object's field takes the priors of objects without a twin (the solid prior,
+/// `objects::hidden_space`): only when no other object shares its class (`class_size`: the
+/// objects of its class, itself included). Objects with twins are completed from them by a
+/// category field, and their own fields, which registration and the uncertainty ranking read,
+/// stay the observations' alone.
+pub fn takes_shape_priors(class_size: usize) -> bool {
+    class_size <= 1
+}
+
+/// Per object, the number of objects of its class, from each class's member list.
+pub fn class_sizes<'a>(classes: impl IntoIterator<Item = &'a [ObjectId]>) -> HashMap<ObjectId, usize> {
+    classes
+        .into_iter()
+        .flat_map(|members| members.iter().map(move |id| (*id, members.len())))
+        .collect()
 }
 
 /// Whether frames are still streaming in.
@@ -173,6 +184,18 @@ pub fn category_field_facts(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn only_objects_alone_in_their_class_take_the_shape_priors() {
+        assert!(super::takes_shape_priors(1));
+        assert!(!super::takes_shape_priors(2) && !super::takes_shape_priors(7));
+        let (chairs, lamp) = ([ObjectId(1), ObjectId(4)], [ObjectId(2)]);
+        let sizes = super::class_sizes([&chairs[..], &lamp[..]]);
+        assert_eq!(
+            (sizes[&ObjectId(1)], sizes[&ObjectId(4)], sizes[&ObjectId(2)]),
+            (2, 2, 1)
+        );
+    }
+
     use super::*;
 
     #[test]

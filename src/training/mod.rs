@@ -11,8 +11,8 @@ pub mod scheduler;
 
 pub use config::ScheduleConfig;
 pub use facts::{
-    FieldFacts, FieldKey, FieldRole, LastSeen, MeshSource, Sighting, StreamPhase, category_field_facts,
-    object_field_facts,
+    FieldFacts, FieldKey, FieldRole, LastSeen, MeshSource, Sighting, StreamPhase, category_field_facts, class_sizes,
+    object_field_facts, takes_shape_priors,
 };
 pub use field_progress::{FieldProgress, FieldState};
 pub use phase_end::PhaseEnd;

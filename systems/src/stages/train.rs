@@ -10,13 +10,17 @@ use catmap::rng::{RngStream, seeded_rng};
 use nalgebra::Point3;
 use rayon::prelude::*;
 
-use catmap::FrameIndex;
 use catmap::meshing::ObjectMeshConfig;
 use catmap::objects::hidden_space::HiddenSpaceCache;
-use catmap::training::{BatchPlan, FieldFacts, MeshSource, StreamPhase, object_field_facts};
+use catmap::training::{
+    BatchPlan, FieldFacts, MeshSource, StreamPhase, class_sizes, object_field_facts, takes_shape_priors,
+};
+use catmap::{FrameIndex, ObjectId};
+use std::collections::HashMap;
 
 use crate::components::{
-    Background, CameraFrame, CategorySlot, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Object, ObjectBounds,
+    Background, CameraFrame, Category, CategorySlot, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Object,
+    ObjectBounds,
 };
 use crate::resources::{CategoryFields, Fields, Settings, StageTimes, StreamProgress, TrainingQueue, TrainingSchedule};
 
@@ -118,6 +122,7 @@ pub fn train_fields(
     mut schedule: ResMut<TrainingSchedule>,
     progress: Res<StreamProgress>,
     frames: Query<&CameraFrame>,
+    categories: Query<&Category>,
     mut owners: FieldOwners,
     mut times: ResMut<StageTimes>,
 ) {
@@ -133,6 +138,7 @@ pub fn train_fields(
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
     schedule.planned_objects = plan.indices.len();
     let object_rays = config.object_rays();
+    let class_sizes = class_sizes(categories.iter().map(|c| &c.members[..]));
     for _ in 0..std::mem::take(&mut queue.pending) {
         if !plan.indices.is_empty() {
             let step = train_one(
@@ -140,14 +146,14 @@ pub fn train_fields(
                 FieldOwner::Objects,
                 &plan,
                 (&mut fields.objects, &mut fields.hidden_spaces),
-                &object_rays,
+                (&object_rays, &class_sizes),
                 &config.meshes.object,
             );
             schedule.record_step(&plan.keys, step, &config.schedule.plateau, "object");
         }
         if cfg.background_due(queue.steps_done) && !fields.background.is_empty() {
             let (plan, batch) = (BatchPlan::background(), (&mut fields.background, &mut Vec::new()));
-            let (rays, meshing) = (&cfg.background_rays, &config.meshes.object);
+            let (rays, meshing) = ((&cfg.background_rays, &HashMap::new()), &config.meshes.object);
             if let Err(e) = train_one(&mut owners, FieldOwner::Background, &plan, batch, rays, meshing) {
                 tracing::warn!(error = %e, "background training step skipped");
             }
@@ -172,13 +178,15 @@ fn object_facts(owners: &FieldOwners, phase: StreamPhase, tick: &[FrameIndex]) -
 /// its factors): samples their owners' rays (the background's, or the objects', carving the
 /// region each object is meshed in) in parallel, trains, and records each owner's losses and
 /// carving counts; returns their total losses, in index order. `hidden` keeps, per batch index,
-/// the cells of each object's box no view saw into (the solid prior's; empty for the background).
+/// the cells of each object's box no view saw into (the solid prior's; empty for the background);
+/// `class_sizes` are the objects of each object's class (an object alone in its class takes the
+/// priors of objects without a twin).
 fn train_one(
     owners: &mut FieldOwners,
     owner: FieldOwner,
     plan: &BatchPlan,
     (batch, hidden): (&mut catmap::field::FieldBatch, &mut Vec<HiddenSpaceCache>),
-    rays: &RaySamplerConfig,
+    (rays, class_sizes): (&RaySamplerConfig, &HashMap<ObjectId, usize>),
     meshing: &ObjectMeshConfig,
 ) -> catmap::Result<Vec<f32>> {
     let indices = &plan.indices[..];
@@ -188,9 +196,10 @@ fn train_one(
         .filter(|(is_background, .., slot, _, _)| {
             *is_background == background && indices.binary_search(&slot.index).is_ok()
         })
-        .map(|(_, _, _, member, bounds, keyframes, slot, rng, loss)| {
+        .map(|(_, object, _, _, bounds, keyframes, slot, rng, loss)| {
             let object_box = bounds.map(|b| meshing.meshed_box(&b.oriented_box));
-            let priors = MeshSource::of_category_member(member).takes_shape_priors();
+            let class_size = |o: &Object| class_sizes.get(&o.id).copied().unwrap_or(1);
+            let priors = object.is_some_and(|o| takes_shape_priors(class_size(o)));
             let fitted_box = bounds.filter(|_| priors).map(|b| b.oriented_box);
             (keyframes, slot, rng, loss, (object_box, fitted_box))
         })
