@@ -73,7 +73,6 @@ mod tests {
             world_from_box: Isometry3::translation(1.0, 2.0, 0.5),
             cell_size: Vector3::new(0.01, 0.01, 0.01),
             centres: vec![Point3::new(0.005, 0.005, 0.005)],
-            cells: 4096,
         };
         let mut rays = RaySamples {
             samples_per_ray: 4,

@@ -128,8 +128,6 @@ pub struct HiddenSpace {
     pub cell_size: Vector3<f32>,
     /// Centres of the hidden cells, box frame, in cell order (x fastest).
     pub centres: Vec<Point3<f32>>,
-    /// Cells of the box in all.
-    pub cells: usize,
 }
 
 /// What `view` says of the point `p_world`, `margin_m` being how far from the measured surface
@@ -230,17 +228,12 @@ impl HiddenSpace {
             world_from_box: object_box.world_from_box,
             cell_size,
             centres,
-            cells: n * n * n,
         }
     }
 
     /// The share of the box's cells that are hidden.
     pub fn hidden_share(&self) -> f64 {
-        if self.cells == 0 {
-            0.0
-        } else {
-            self.centres.len() as f64 / self.cells as f64
-        }
+        self.centres.len() as f64 / CELLS_PER_AXIS.pow(3) as f64
     }
 
     /// A point drawn uniformly from the hidden cells (world frame), `None` when there are none.
@@ -268,10 +261,8 @@ impl HiddenSpace {
 /// One object's hidden space, recomputed only when its keyframes or its box changed.
 #[derive(Debug, Clone, Default)]
 pub struct HiddenSpaceCache {
-    /// The frames of the views and the box the space was computed from.
-    key: Option<(Vec<FrameIndex>, OrientedBox, HiddenCells)>,
-    /// The space computed then.
-    space: Option<HiddenSpace>,
+    /// The frames of the views, the box and the rule the space was computed from, and the space.
+    computed: Option<((Vec<FrameIndex>, OrientedBox, HiddenCells), HiddenSpace)>,
 }
 
 impl HiddenSpaceCache {
@@ -280,12 +271,17 @@ impl HiddenSpaceCache {
     /// resumed with an empty cache continues bit-identically).
     pub fn current(&mut self, views: &[&ObjectView], object_box: &OrientedBox, rule: HiddenCells) -> &HiddenSpace {
         let key = (views.iter().map(|v| v.frame).collect::<Vec<_>>(), *object_box, rule);
-        if self.key.as_ref() != Some(&key) || self.space.is_none() {
-            self.space = Some(HiddenSpace::of_views(views, object_box, rule));
-            self.key = Some(key);
+        if self
+            .computed
+            .as_ref()
+            .is_none_or(|(computed_for, _)| *computed_for != key)
+        {
+            self.computed = None;
         }
-        self.space
-            .get_or_insert_with(|| HiddenSpace::of_views(views, object_box, rule))
+        &self
+            .computed
+            .get_or_insert_with(|| (key, HiddenSpace::of_views(views, object_box, rule)))
+            .1
     }
 }
 

@@ -167,13 +167,10 @@ fn a_cell_behind_another_object_in_one_view_is_not_hidden_by_another() {
     );
 }
 
-#[test]
-fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
-    // A table (the object): a top, and an apron hanging down to 30 cm along its front edge and
-    // the front half of its +x side. From above the space under the top lies behind the top;
-    // from the front, low, behind the apron; from the +x side, low, the view sees under the top
-    // through the back half, and the front half lies behind the side apron.
-    let scene = [
+/// A table (the object): a top 0.7–0.75 m high over [−0.5, 0.5] × [1, 2], and an apron hanging
+/// down to 30 cm along its front edge and the front half of its +x side.
+fn table_with_aprons() -> Vec<Solid> {
+    vec![
         Solid {
             aabb: aabb([-0.5, 1.0, 0.7], [0.5, 2.0, 0.75]),
             is_object: true,
@@ -186,11 +183,30 @@ fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
             aabb: aabb([0.48, 1.0, 0.3], [0.5, 1.5, 0.7]),
             is_object: true,
         },
-    ];
-    let object_box = aabb([-0.5, 1.0, 0.0], [0.5, 2.0, 0.75]);
-    let above = render_pitched([0.0, 1.5, 2.5], 0.0, -1.45, &scene);
-    let low = render([0.0, -1.0, 0.1], 0.0, &scene);
-    let side = render([2.5, 1.5, 0.1], -std::f32::consts::FRAC_PI_2, &scene);
+    ]
+}
+
+/// The table's box.
+fn table_box() -> OrientedBox {
+    aabb([-0.5, 1.0, 0.0], [0.5, 2.0, 0.75])
+}
+
+/// Views of the table's scene: from above, from the front (low), from the +x side (low).
+fn table_views(scene: &[Solid]) -> [ObjectView; 3] {
+    [
+        render_pitched([0.0, 1.5, 2.5], 0.0, -1.45, scene),
+        render([0.0, -1.0, 0.1], 0.0, scene),
+        render([2.5, 1.5, 0.1], -std::f32::consts::FRAC_PI_2, scene),
+    ]
+}
+
+#[test]
+fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
+    // From above the space under the table's top lies behind the top; from the front, low,
+    // behind the apron; from the +x side, low, the view sees under the top through the back
+    // half, and the front half lies behind the side apron.
+    let scene = table_with_aprons();
+    let [above, low, side] = table_views(&scene);
     let views = [&above, &low, &side];
     assert_eq!(
         cell_evidence(&views, &Point3::new(0.0, 1.5, 0.1), 0.03),
@@ -206,8 +222,8 @@ fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
             .filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y))
             .count()
     };
-    let all = HiddenSpace::of_views(&views, &object_box, HiddenCells::All);
-    let enclosed = HiddenSpace::of_views(&views, &object_box, HiddenCells::Enclosed);
+    let all = HiddenSpace::of_views(&views, &table_box(), HiddenCells::All);
+    let enclosed = HiddenSpace::of_views(&views, &table_box(), HiddenCells::Enclosed);
     assert!(under_top(&all) > 50, "{} hidden cells under the top", under_top(&all));
     assert_eq!(
         under_top(&enclosed),
@@ -216,7 +232,7 @@ fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
     );
     // Seen from the front and above only, the space under the top is enclosed: the apron in
     // front, the box's faces elsewhere.
-    let closed = HiddenSpace::of_views(&[&above, &low], &object_box, HiddenCells::Enclosed);
+    let closed = HiddenSpace::of_views(&[&above, &low], &table_box(), HiddenCells::Enclosed);
     assert!(
         under_top(&closed) > 50,
         "{} enclosed cells under the top",
@@ -229,28 +245,12 @@ fn space_under_an_overhang_that_opens_onto_occluded_space_is_not_enclosed() {
     // The table of the test above with a cabinet (another object) filling the back half of the
     // space under its top: from the +x side that half lies behind the cabinet, the front half
     // behind the side apron. The front half opens onto space that may be empty.
-    let scene = [
-        Solid {
-            aabb: aabb([-0.5, 1.0, 0.7], [0.5, 2.0, 0.75]),
-            is_object: true,
-        },
-        Solid {
-            aabb: aabb([-0.5, 1.0, 0.3], [0.5, 1.02, 0.7]),
-            is_object: true,
-        },
-        Solid {
-            aabb: aabb([0.48, 1.0, 0.3], [0.5, 1.5, 0.7]),
-            is_object: true,
-        },
-        Solid {
-            aabb: aabb([-0.5, 1.55, 0.0], [0.5, 1.95, 0.69]),
-            is_object: false,
-        },
-    ];
-    let object_box = aabb([-0.5, 1.0, 0.0], [0.5, 2.0, 0.75]);
-    let above = render_pitched([0.0, 1.5, 2.5], 0.0, -1.45, &scene);
-    let low = render([0.0, -1.0, 0.1], 0.0, &scene);
-    let side = render([2.5, 1.5, 0.1], -std::f32::consts::FRAC_PI_2, &scene);
+    let mut scene = table_with_aprons();
+    scene.push(Solid {
+        aabb: aabb([-0.5, 1.55, 0.0], [0.5, 1.95, 0.69]),
+        is_object: false,
+    });
+    let [above, low, side] = table_views(&scene);
     let views = [&above, &low, &side];
     assert_eq!(
         cell_evidence(&views, &Point3::new(0.0, 1.75, 0.4), 0.03),
@@ -262,12 +262,26 @@ fn space_under_an_overhang_that_opens_onto_occluded_space_is_not_enclosed() {
             .filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y))
             .count()
     };
-    let all = HiddenSpace::of_views(&views, &object_box, HiddenCells::All);
-    let enclosed = HiddenSpace::of_views(&views, &object_box, HiddenCells::Enclosed);
+    let all = HiddenSpace::of_views(&views, &table_box(), HiddenCells::All);
+    let enclosed = HiddenSpace::of_views(&views, &table_box(), HiddenCells::Enclosed);
     assert!(
         front_half(&all) > 50,
         "{} hidden cells in the front half",
         front_half(&all)
     );
     assert_eq!(front_half(&enclosed), 0);
+}
+
+#[test]
+fn the_cache_recomputes_when_the_box_changes_and_only_then() {
+    let (scene, object_box) = slab_and_box();
+    let front = render([0.0, -1.0, 0.2], 0.0, &scene);
+    let mut cache = HiddenSpaceCache::default();
+    let first = cache.current(&[&front], &object_box, HiddenCells::All).clone();
+    assert_eq!(first, HiddenSpace::of_views(&[&front], &object_box, HiddenCells::All));
+    let shallower = aabb([-0.2, 1.0, 0.0], [0.2, 1.2, 0.4]);
+    let second = cache.current(&[&front], &shallower, HiddenCells::All).clone();
+    assert_ne!(second, first, "a new box, a new space");
+    assert_eq!(second, HiddenSpace::of_views(&[&front], &shallower, HiddenCells::All));
+    assert_eq!(*cache.current(&[&front], &object_box, HiddenCells::All), first);
 }

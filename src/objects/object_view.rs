@@ -36,7 +36,11 @@ impl PixelState {
     /// The rendered opacity the loss asks of the ray, if it asks one: 1 on the object's pixels,
     /// 0 on other objects' (free space up to them).
     pub fn opacity_target(self) -> Option<f32> {
-        self.sample_target().map_or(self.ray_target(), |_| None)
+        match self {
+            Self::ThisObject => Some(1.0),
+            Self::OtherObject => Some(0.0),
+            Self::Unknown | Self::HiddenSolid | Self::BelowSupport => None,
+        }
     }
 
     /// The occupancy each sample of a prior ray is asked to have (1 solid, 0 empty); `None` for
@@ -46,15 +50,6 @@ impl PixelState {
             Self::HiddenSolid => Some(1.0),
             Self::BelowSupport => Some(0.0),
             Self::ThisObject | Self::OtherObject | Self::Unknown => None,
-        }
-    }
-
-    /// The rendered opacity asked of a pixel's ray.
-    fn ray_target(self) -> Option<f32> {
-        match self {
-            Self::ThisObject => Some(1.0),
-            Self::OtherObject => Some(0.0),
-            Self::Unknown | Self::HiddenSolid | Self::BelowSupport => None,
         }
     }
 }

@@ -215,11 +215,14 @@ fn train_one(
     if !background && hidden.len() < batch.len() {
         hidden.resize_with(batch.len(), HiddenSpaceCache::default);
     }
-    let mut caches: Vec<Option<&mut HiddenSpaceCache>> = hidden.iter_mut().map(Some).collect();
-    let mut work_caches: Vec<_> = owned
-        .iter()
-        .map(|&i| caches.get_mut(i).and_then(Option::take))
+    // The planned fields' caches, in `work`'s ascending index order (none for the background).
+    let mut work_caches: Vec<Option<&mut HiddenSpaceCache>> = hidden
+        .iter_mut()
+        .enumerate()
+        .filter(|(i, _)| owned.binary_search(i).is_ok())
+        .map(|(_, cache)| Some(cache))
         .collect();
+    work_caches.resize_with(work.len(), || None);
     let fields: Vec<RaySamples> = work
         .par_iter_mut()
         .zip(work_caches.par_iter_mut())
