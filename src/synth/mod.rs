@@ -22,6 +22,7 @@ pub mod geometry;
 pub mod layout;
 pub mod preset;
 pub mod primitives;
+pub mod reachable_space;
 pub mod registration_trial;
 pub mod render;
 pub mod replica_writer;
