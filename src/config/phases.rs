@@ -32,6 +32,11 @@ impl MapperConfig {
     /// unset).
     pub const CARVING_SAMPLES: usize = 3;
 
+    /// Solid-prior and seen-free-prior rays per step of the `fast` schedule's object sampler
+    /// (`fields.object_rays.hidden_solid_rays` / `seen_free_rays` unset), for objects alone in
+    /// their class.
+    pub const PRIOR_RAYS: usize = 8;
+
     /// The schedule that applies: `schedule.policy`, except that the offline protocol is the
     /// paper's fixed one (its classes are registered on the finished per-object fields).
     pub fn training_policy(&self) -> SchedulePolicy {
@@ -42,14 +47,18 @@ impl MapperConfig {
         }
     }
 
-    /// The object sampler the run uses: `fields.object_rays`, its unset `box_free_samples` set by
-    /// the schedule — [`Self::CARVING_SAMPLES`] under `fast`, none (vMAP's sampler) under `paper`.
+    /// The object sampler the run uses: `fields.object_rays`, its unset `box_free_samples` and
+    /// prior ray counts set by the schedule — [`Self::CARVING_SAMPLES`] and [`Self::PRIOR_RAYS`]
+    /// under `fast`, none (vMAP's sampler, no priors) under `paper`.
     pub fn object_rays(&self) -> RaySamplerConfig {
-        let carving = match self.training_policy() {
-            SchedulePolicy::Fast => Self::CARVING_SAMPLES,
-            SchedulePolicy::Paper => 0,
+        let (carving, priors) = match self.training_policy() {
+            SchedulePolicy::Fast => (Self::CARVING_SAMPLES, Self::PRIOR_RAYS),
+            SchedulePolicy::Paper => (0, 0),
         };
-        self.fields.object_rays.with_default_carving(carving)
+        self.fields
+            .object_rays
+            .with_default_carving(carving)
+            .with_default_priors(priors, priors)
     }
 
     /// The phases after the stream: the paper's fixed protocol (`fields.final_steps` or
@@ -128,6 +137,27 @@ mod tests {
         c.fields.offline = matches!(protocol, Protocol::Offline);
         c.category_fields.enabled = matches!(fields, Fields::Category);
         c
+    }
+
+    #[test]
+    fn the_schedule_sets_the_unset_box_samples_and_priors_and_the_config_wins() {
+        let sampler = |policy| {
+            let rays = config(policy, Protocol::Online, Fields::Category).object_rays();
+            (rays.carving_samples(), rays.solid_prior_rays(), rays.seen_free_rays())
+        };
+        assert_eq!(sampler(SchedulePolicy::Fast), (3, 8, 8));
+        assert_eq!(
+            sampler(SchedulePolicy::Paper),
+            (0, 0, 0),
+            "the paper's sampler, no priors"
+        );
+        let mut off = config(SchedulePolicy::Fast, Protocol::Online, Fields::Category);
+        off.fields.object_rays.hidden_solid_rays = Some(0);
+        off.fields.object_rays.seen_free_rays = Some(2);
+        let rays = off.object_rays();
+        assert_eq!((rays.solid_prior_rays(), rays.seen_free_rays()), (0, 2));
+        let offline = config(SchedulePolicy::Fast, Protocol::Offline, Fields::Category).object_rays();
+        assert_eq!(offline.solid_prior_rays(), 0, "offline runs the paper's protocol");
     }
 
     #[test]

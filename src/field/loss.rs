@@ -14,7 +14,8 @@
 //! [`crate::objects::hidden_space`]) render nothing: each of their samples adds
 //! `L_solid = Σ_hidden −ln o / |hidden samples|`, weighted by the rays' `solid_weight`, asking it to
 //! be solid (the gradient of the raw α is `ALPHA_SCALE · (o − 1)`, which does not vanish where the
-//! field is empty).
+//! field is empty). The samples of the priors asking for empty space (`BelowSupport`, `SeenFree`)
+//! add −ln(1 − o) instead ([`PixelState::sample_target`] 0).
 //!
 //! Each term is a **mean over its masked rays** (sum over RGB inside the colour term), computed
 //! per object and then summed over objects, exactly as vMAP's `reduce_batch_loss(avg=True)`.

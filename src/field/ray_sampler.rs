@@ -51,13 +51,17 @@ pub struct RaySamplerConfig {
     /// How far behind an occluder's depth a ray of another object's pixel is sampled, metres.
     pub behind_occluder_m: f32,
     /// Prior rays per step in the cells of the object's box that no view saw into, each sample
-    /// asked to be solid ([`crate::objects::hidden_space`]); 0: no solid prior.
-    pub hidden_solid_rays: usize,
+    /// asked to be solid ([`crate::objects::hidden_space`]). `None`: the schedule's choice
+    /// ([`RaySamplerConfig::solid_prior_rays`]); 0: no solid prior.
+    pub hidden_solid_rays: Option<usize>,
     /// Which hidden cells the solid prior draws from.
     pub hidden_cells: HiddenCells,
     /// Prior rays per step under the object's box, below the lowest point it was seen at, each
     /// sample asked to be empty (what the object stands on); 0: none.
     pub below_support_rays: usize,
+    /// Prior rays per step around the centres of the cells of the object's box that a view saw
+    /// free, each sample asked to be empty. `None`: the schedule's choice; 0: none.
+    pub seen_free_rays: Option<usize>,
     /// Weight of the priors' loss (mean over their samples of −ln o, or −ln(1 − o) under the box).
     pub hidden_solid_weight: f32,
 }
@@ -79,9 +83,10 @@ impl RaySamplerConfig {
         surface_samples: 9,
         surface_band_m: 0.1,
         behind_occluder_m: 0.05,
-        hidden_solid_rays: 0,
+        hidden_solid_rays: None,
         hidden_cells: HiddenCells::Enclosed,
         below_support_rays: 0,
+        seen_free_rays: None,
         hidden_solid_weight: 1.0,
     };
 
@@ -94,9 +99,10 @@ impl RaySamplerConfig {
         surface_samples: 9,
         surface_band_m: 0.1,
         behind_occluder_m: 0.05,
-        hidden_solid_rays: 0,
+        hidden_solid_rays: None,
         hidden_cells: HiddenCells::Enclosed,
         below_support_rays: 0,
+        seen_free_rays: None,
         hidden_solid_weight: 1.0,
     };
 
@@ -114,6 +120,24 @@ impl RaySamplerConfig {
     /// The same sampler with an unset box sample count set to `samples`.
     pub fn with_default_carving(mut self, samples: usize) -> Self {
         self.box_free_samples.get_or_insert(samples);
+        self
+    }
+
+    /// The solid prior's rays per step (unset: none; the mapper's config sets them from the
+    /// schedule, `MapperConfig::object_rays`).
+    pub fn solid_prior_rays(&self) -> usize {
+        self.hidden_solid_rays.unwrap_or(0)
+    }
+
+    /// The seen-free prior's rays per step (unset: none, as for the solid prior).
+    pub fn seen_free_rays(&self) -> usize {
+        self.seen_free_rays.unwrap_or(0)
+    }
+
+    /// The same sampler with unset prior ray counts set to `solid` and `seen_free`.
+    pub fn with_default_priors(mut self, solid: usize, seen_free: usize) -> Self {
+        self.hidden_solid_rays.get_or_insert(solid);
+        self.seen_free_rays.get_or_insert(seen_free);
         self
     }
 
@@ -161,12 +185,13 @@ pub fn sample_window_rays(
     let views: Vec<&ObjectView> = window.slots().iter().map(|s| &s.data).collect();
     let mut rays = sample_training_rays(&views, window.recent_slots(), field_origin, object_box, cfg, rng);
     let counts = PriorRays {
-        hidden_solid: cfg.hidden_solid_rays,
+        hidden_solid: cfg.solid_prior_rays(),
         below_support: cfg.below_support_rays,
+        seen_free: cfg.seen_free_rays(),
         weight: cfg.hidden_solid_weight,
     };
     if let Some((cache, fitted_box)) = hidden
-        && counts.hidden_solid + counts.below_support > 0
+        && counts.hidden_solid + counts.below_support + counts.seen_free > 0
     {
         let space = cache.current(&views, fitted_box, cfg.hidden_cells);
         append_prior_rays(&mut rays, space, counts, field_origin, rng);
@@ -300,7 +325,7 @@ fn depths_along_ray(
             z[start..].sort_by(f32::total_cmp);
         }
         // Views hold no prior rays; were one there, it would only teach free space.
-        PixelState::OtherObject | PixelState::HiddenSolid | PixelState::BelowSupport => {
+        PixelState::OtherObject | PixelState::HiddenSolid | PixelState::BelowSupport | PixelState::SeenFree => {
             stratified(
                 (depth - band).max(0.0),
                 depth + cfg.behind_occluder_m,

@@ -1,8 +1,9 @@
 //! Prior rays: samples drawn in the cells of an object's box that no view saw into (asked to be
-//! solid) and under the box, below the lowest point the object was seen at (asked to be empty),
-//! [`crate::objects::hidden_space`]; the loss is [`super::loss`]'s `L_solid`. They are appended to
-//! a step's rays as rays of `PixelState::HiddenSolid` / `PixelState::BelowSupport` (no depth, no
-//! colour; their sample depths only keep the order).
+//! solid), under the box, below the lowest point the object was seen at, and around the centres
+//! of the cells a view saw free (both asked to be empty), [`crate::objects::hidden_space`]; the
+//! loss is [`super::loss`]'s `L_solid`. They are appended to a step's rays, in that order, as
+//! rays of `PixelState::HiddenSolid` / `BelowSupport` / `SeenFree` (no depth, no colour; their
+//! sample depths only keep the order).
 
 use nalgebra::Point3;
 use rand::Rng;
@@ -18,6 +19,8 @@ pub struct PriorRays {
     pub hidden_solid: usize,
     /// Rays under the box.
     pub below_support: usize,
+    /// Rays around the centres of the cells seen free (none when no cell is).
+    pub seen_free: usize,
     /// Weight of the prior's loss.
     pub weight: f32,
 }
@@ -36,16 +39,24 @@ pub fn append_prior_rays(
     } else {
         counts.hidden_solid
     };
-    if solid + counts.below_support == 0 {
+    let free = if hidden.free_centres.is_empty() {
+        0
+    } else {
+        counts.seen_free
+    };
+    if solid + counts.below_support + free == 0 {
         return;
     }
     rays.solid_weight = counts.weight;
     let kinds = std::iter::repeat_n(PixelState::HiddenSolid, solid)
-        .chain(std::iter::repeat_n(PixelState::BelowSupport, counts.below_support));
+        .chain(std::iter::repeat_n(PixelState::BelowSupport, counts.below_support))
+        .chain(std::iter::repeat_n(PixelState::SeenFree, free));
+    let centre = hidden.world_from_box * Point3::origin();
     for state in kinds {
         for k in 0..rays.samples_per_ray {
             let p = match state {
-                PixelState::HiddenSolid => hidden.draw(rng).unwrap_or(hidden.world_from_box * Point3::origin()),
+                PixelState::HiddenSolid => hidden.draw(rng).unwrap_or(centre),
+                PixelState::SeenFree => hidden.draw_free(rng).unwrap_or(centre),
                 _ => hidden.draw_below_support(rng),
             };
             let p = p - field_origin.coords;
@@ -67,12 +78,14 @@ mod tests {
     use crate::rng::{RngStream, seeded_rng};
 
     #[test]
-    fn prior_rays_lie_in_hidden_cells_and_under_the_box() {
-        // A box of 16 cells of 1 cm per edge at (1, 2, 0.5) (its bottom at z = 0.42), one cell hidden.
+    fn prior_rays_lie_in_hidden_cells_under_the_box_and_around_seen_free_centres() {
+        // A box of 16 cells of 1 cm per edge at (1, 2, 0.5) (its bottom at z = 0.42), one cell
+        // hidden, one seen free.
         let hidden = HiddenSpace {
             world_from_box: Isometry3::translation(1.0, 2.0, 0.5),
             cell_size: Vector3::new(0.01, 0.01, 0.01),
             centres: vec![Point3::new(0.005, 0.005, 0.005)],
+            free_centres: vec![Point3::new(-0.035, 0.025, -0.005)],
         };
         let mut rays = RaySamples {
             samples_per_ray: 4,
@@ -82,6 +95,7 @@ mod tests {
         let counts = PriorRays {
             hidden_solid: 3,
             below_support: 2,
+            seen_free: 2,
             weight: 0.5,
         };
         append_prior_rays(
@@ -92,7 +106,7 @@ mod tests {
             &mut seeded_rng(1, RngStream::Mapper),
         );
         rays.validate().expect("consistent arrays");
-        assert_eq!((rays.num_rays(), rays.solid_weight), (5, 0.5));
+        assert_eq!((rays.num_rays(), rays.solid_weight), (7, 0.5));
         for (ray, state) in rays.states.iter().enumerate() {
             for p in &rays.points[ray * 4..(ray + 1) * 4] {
                 // World = origin + p; box frame = world − (1, 2, 0.5).
@@ -104,13 +118,29 @@ mod tests {
                         assert!((top - BELOW_SUPPORT_M..=top).contains(&local[2]), "{p:?}");
                         assert!(local[0].abs() <= 0.09 && local[1].abs() <= 0.09, "{p:?}");
                     }
+                    PixelState::SeenFree => {
+                        // Within a quarter cell (2.5 mm) of the free cell's centre.
+                        let centre = [-0.035, 0.025, -0.005];
+                        assert!((0..3).all(|a| (local[a] - centre[a]).abs() <= 0.0025 + 1e-6), "{p:?}");
+                    }
                     other => panic!("{other:?} among prior rays"),
                 }
             }
         }
-        // No hidden cell: only the rays under the box.
+        let order: Vec<PixelState> = rays.states.clone();
+        assert_eq!(
+            order,
+            [
+                [PixelState::HiddenSolid; 3].as_slice(),
+                &[PixelState::BelowSupport; 2],
+                &[PixelState::SeenFree; 2]
+            ]
+            .concat()
+        );
+        // No hidden cell and no cell seen free: only the rays under the box.
         let empty = HiddenSpace {
             centres: Vec::new(),
+            free_centres: Vec::new(),
             ..hidden
         };
         let mut few = RaySamples {

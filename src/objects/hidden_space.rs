@@ -24,6 +24,13 @@
 //! in): its faces are where the object was seen to end. Which hidden cells the prior takes is
 //! [`HiddenCells`]' choice; the support prior's samples lie under the box
 //! ([`HiddenSpace::draw_below_support`]).
+//!
+//! The cells seen free feed the seen-free prior (`fields.object_rays.seen_free_rays`): samples
+//! around their centres ([`HiddenSpace::draw_free`]) asked to be empty. The rays that saw them
+//! free are among the keyframe rays the field trains on anyway, but a step draws few of them
+//! (the space under a nightstand's bottom panel, seen through its legs from a few views); the
+//! prior gives that evidence the same weight as the hidden cells', so that the solid prior
+//! cannot fill what was seen through (a lamp's base disc, under a panel).
 
 use nalgebra::{Isometry3, Point3, Vector3};
 use rand::{Rng, RngExt};
@@ -40,6 +47,9 @@ pub const BELOW_SUPPORT_M: f32 = 0.06;
 
 /// Gap between the box's bottom face and that slab, metres.
 pub const SUPPORT_GAP_M: f32 = 0.01;
+
+/// The span, as a share of a cell's edge, of the draws around a seen-free cell's centre.
+pub const FREE_DRAW_SPREAD: f32 = 0.5;
 
 /// Which hidden cells the solid prior asks to be solid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -128,6 +138,8 @@ pub struct HiddenSpace {
     pub cell_size: Vector3<f32>,
     /// Centres of the hidden cells, box frame, in cell order (x fastest).
     pub centres: Vec<Point3<f32>>,
+    /// Centres of the cells seen free, box frame, in cell order.
+    pub free_centres: Vec<Point3<f32>>,
 }
 
 /// What `view` says of the point `p_world`, `margin_m` being how far from the measured surface
@@ -158,7 +170,9 @@ fn view_evidence(view: &ObjectView, p_world: &Point3<f32>, margin_m: f32) -> Vie
         match view.states[i] {
             PixelState::ThisObject => ViewEvidence::BehindObject,
             PixelState::OtherObject => ViewEvidence::BehindOther,
-            PixelState::Unknown | PixelState::HiddenSolid | PixelState::BelowSupport => ViewEvidence::Nothing,
+            PixelState::Unknown | PixelState::HiddenSolid | PixelState::BelowSupport | PixelState::SeenFree => {
+                ViewEvidence::Nothing
+            }
         }
     }
 }
@@ -208,18 +222,16 @@ impl HiddenSpace {
             }
         }
         let grid = EvidenceGrid { n, evidence };
-        let mut centres = Vec::new();
+        let (mut centres, mut free_centres) = (Vec::new(), Vec::new());
         for k in 0..n {
             for j in 0..n {
                 for i in 0..n {
-                    let kept = match rule {
-                        HiddenCells::All => grid.at(i, j, k) == CellEvidence::Hidden,
-                        HiddenCells::Enclosed => {
-                            grid.at(i, j, k) == CellEvidence::Hidden && !grid.open_sideways(i, j, k)
+                    match grid.at(i, j, k) {
+                        CellEvidence::SeenFree => free_centres.push(centre_of(i, j, k)),
+                        CellEvidence::Hidden if rule == HiddenCells::All || !grid.open_sideways(i, j, k) => {
+                            centres.push(centre_of(i, j, k))
                         }
-                    };
-                    if kept {
-                        centres.push(centre_of(i, j, k));
+                        _ => {}
                     }
                 }
             }
@@ -228,6 +240,15 @@ impl HiddenSpace {
             world_from_box: object_box.world_from_box,
             cell_size,
             centres,
+            free_centres,
+        }
+    }
+
+    /// How many cells the priors draw from.
+    pub fn cells(&self) -> PriorCells {
+        PriorCells {
+            hidden: self.centres.len(),
+            seen_free: self.free_centres.len(),
         }
     }
 
@@ -246,6 +267,20 @@ impl HiddenSpace {
         Some(self.world_from_box * (centre + jitter))
     }
 
+    /// A point drawn near a cell seen free (world frame), `None` when there is none: within
+    /// [`FREE_DRAW_SPREAD`] of a cell's edge around its centre. The view saw the centre free, by
+    /// the cell's half diagonal before the surface on the centre's pixel; the cell's corners lie
+    /// on other pixels, which may see something nearer (a lamp's 3 cm base in the bottom of a
+    /// 10 cm cell).
+    pub fn draw_free(&self, rng: &mut impl Rng) -> Option<Point3<f32>> {
+        if self.free_centres.is_empty() {
+            return None;
+        }
+        let centre = self.free_centres[rng.random_range(0..self.free_centres.len())];
+        let jitter = Vector3::from_fn(|a, _| (rng.random::<f32>() - 0.5) * FREE_DRAW_SPREAD * self.cell_size[a]);
+        Some(self.world_from_box * (centre + jitter))
+    }
+
     /// A point drawn uniformly under the box (world frame): in the slab [`BELOW_SUPPORT_M`] below
     /// its bottom face (the lowest the object was seen at, what it stands on), starting
     /// [`SUPPORT_GAP_M`] under it, over the footprint grown by a cell on each side.
@@ -258,6 +293,15 @@ impl HiddenSpace {
     }
 }
 
+/// The cells of one object's box the priors draw from (of [`CELLS_PER_AXIS`]³).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct PriorCells {
+    /// Cells the solid prior asks to be solid.
+    pub hidden: usize,
+    /// Cells seen free, asked to be empty around their centres.
+    pub seen_free: usize,
+}
+
 /// One object's hidden space, recomputed only when its keyframes or its box changed.
 #[derive(Debug, Clone, Default)]
 pub struct HiddenSpaceCache {
@@ -266,6 +310,11 @@ pub struct HiddenSpaceCache {
 }
 
 impl HiddenSpaceCache {
+    /// The space as last computed, if it was.
+    pub fn latest(&self) -> Option<&HiddenSpace> {
+        self.computed.as_ref().map(|(_, space)| space)
+    }
+
     /// The hidden space of `object_box` given `views`: the stored one when it was computed from
     /// the same frames and box, else computed now (the same inputs give the same space, so a run
     /// resumed with an empty cache continues bit-identically).

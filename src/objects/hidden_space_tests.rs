@@ -230,6 +230,30 @@ fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
         0,
         "cells open sideways onto seen-free space are not asked to be solid"
     );
+    // The cells the +x view saw free under the top's back half are the seen-free prior's: below
+    // the top, and the draws stay within a quarter cell of their centres.
+    assert_eq!(
+        all.free_centres, enclosed.free_centres,
+        "the rule only picks hidden cells"
+    );
+    let free_world: Vec<Point3<f32>> = enclosed
+        .free_centres
+        .iter()
+        .map(|c| enclosed.world_from_box * c)
+        .collect();
+    assert!(
+        free_world.iter().filter(|p| p.z < 0.69 && p.y > 1.5).count() > 20,
+        "{} cells seen free under the top's back half",
+        free_world.len()
+    );
+    let mut rng = seeded_rng(3, RngStream::Mapper);
+    for _ in 0..200 {
+        let p = enclosed.draw_free(&mut rng).expect("cells seen free");
+        let near = free_world
+            .iter()
+            .any(|c| (0..3).all(|a| (p[a] - c[a]).abs() <= 0.25 * enclosed.cell_size[a] + 1e-5));
+        assert!(near, "{p:?} within a quarter cell of a seen-free centre");
+    }
     // Seen from the front and above only, the space under the top is enclosed: the apron in
     // front, the box's faces elsewhere.
     let closed = HiddenSpace::of_views(&[&above, &low], &table_box(), HiddenCells::Enclosed);

@@ -24,6 +24,9 @@ pub enum PixelState {
     /// Not a pixel: a prior ray whose samples lie under the object's box, below the lowest point
     /// it was seen at (what it stands on); each sample is asked to be empty.
     BelowSupport,
+    /// Not a pixel: a prior ray whose samples lie around the centres of cells of the object's
+    /// box that a view saw free ([`super::hidden_space`]); each sample is asked to be empty.
+    SeenFree,
 }
 
 impl PixelState {
@@ -39,7 +42,7 @@ impl PixelState {
         match self {
             Self::ThisObject => Some(1.0),
             Self::OtherObject => Some(0.0),
-            Self::Unknown | Self::HiddenSolid | Self::BelowSupport => None,
+            Self::Unknown | Self::HiddenSolid | Self::BelowSupport | Self::SeenFree => None,
         }
     }
 
@@ -48,7 +51,7 @@ impl PixelState {
     pub fn sample_target(self) -> Option<f32> {
         match self {
             Self::HiddenSolid => Some(1.0),
-            Self::BelowSupport => Some(0.0),
+            Self::BelowSupport | Self::SeenFree => Some(0.0),
             Self::ThisObject | Self::OtherObject | Self::Unknown => None,
         }
     }

@@ -230,7 +230,8 @@ mod tests {
         };
         // The hollow behind the drawer fronts: x within the side panels, y between the back
         // panel and the fronts, z between the bottom and top panels.
-        let in_hollow = |p: &Point3<f32>| p.x.abs() < 0.204 && p.y > -0.179 && p.y < 0.161 && p.z > 0.101 && p.z < 0.559;
+        let in_hollow =
+            |p: &Point3<f32>| p.x.abs() < 0.204 && p.y > -0.179 && p.y < 0.161 && p.z > 0.101 && p.z < 0.559;
         let hollow: f32 = (0..surface.triangles.len())
             .filter(|&t| in_hollow(&centre(t)))
             .map(|t| surface.triangle_area(t))

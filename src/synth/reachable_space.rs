@@ -236,8 +236,8 @@ mod tests {
 
     #[test]
     fn free_space_next_to_a_face_is_reached_up_to_the_face() {
-        let space = ReachableSpace::around(&[block(0.0, 0.0, 0.0, [0.3, 0.2, 0.1])], 0.005, 2)
-            .expect("a block has vertices");
+        let space =
+            ReachableSpace::around(&[block(0.0, 0.0, 0.0, [0.3, 0.2, 0.1])], 0.005, 2).expect("a block has vertices");
         for p in [
             Point3::new(0.0, 0.0, 0.105),
             Point3::new(0.155, 0.0, 0.05),

@@ -14,7 +14,9 @@ use catmap::{MapperConfig, RgbdFrame};
 use crossbeam_channel::{Receiver, Sender, TrySendError, bounded};
 
 use crate::checkpoint::SavedMapper;
-use crate::components::{Background, FieldLoss, Keyframes, Object, ObjectCloud, ObjectRng, VisibleFrames};
+use crate::components::{
+    Background, Category, FieldLoss, FieldSlot, Keyframes, Object, ObjectCloud, ObjectRng, VisibleFrames,
+};
 use crate::resources::CategoryFields;
 use crate::resources::{
     CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, SmallInstances, StageTimes,
@@ -219,6 +221,7 @@ impl Mapper {
             let key = object.map_or(FieldKey::Background, |o| FieldKey::Object(o.id));
             carving.insert(key, loss.carve);
         }
+        let priors = self.prior_cells();
         let categories = self.world.resource::<CategoryFields>();
         for (id, counts) in categories.ids.iter().zip(&categories.carve) {
             carving.insert(FieldKey::Category(*id), *counts);
@@ -228,11 +231,31 @@ impl Mapper {
             &self.world.resource::<TrainingSchedule>().scheduler,
             self.world.resource::<PhaseProgress>(),
             &carving,
+            &priors,
             crate::summary::CategoryHistory {
                 retired: &categories.retired,
                 frames_replaced: categories.frames_replaced,
             },
         )
+    }
+
+    /// Per object field that takes the priors of objects alone in their class, the cells they
+    /// last drew from.
+    fn prior_cells(&mut self) -> BTreeMap<catmap::training::FieldKey, catmap::objects::hidden_space::PriorCells> {
+        let mut classes = self.world.query::<&Category>();
+        let class_sizes = catmap::training::class_sizes(classes.iter(&self.world).map(|c| &c.members[..]));
+        let mut owners = self.world.query::<(&Object, &FieldSlot)>();
+        let caches = &self.world.resource::<Fields>().hidden_spaces;
+        owners
+            .iter(&self.world)
+            .filter(|(object, _)| {
+                catmap::training::takes_shape_priors(class_sizes.get(&object.id).copied().unwrap_or(1))
+            })
+            .filter_map(|(object, slot)| {
+                let space = caches.get(slot.index)?.latest()?;
+                Some((catmap::training::FieldKey::Object(object.id), space.cells()))
+            })
+            .collect()
     }
 
     /// Number of category fields created so far.

@@ -48,6 +48,10 @@ pub struct FieldTraining {
     /// category field's counts start again when its membership changes.
     #[serde(default)]
     pub carving_share: Option<f64>,
+    /// For an object alone in its class, the cells of its box its priors last drew from
+    /// (`fields.object_rays.hidden_solid_rays`, `seen_free_rays`); `None` for the others.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior_cells: Option<catmap::objects::hidden_space::PriorCells>,
     /// A category field a membership change ended before the run did: why, at which change
     /// (1 = the first) and its members then. Its steps are the steps it had had.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -61,6 +65,7 @@ impl TrainingReport {
         scheduler: &catmap::training::StepScheduler,
         phases: &crate::resources::PhaseProgress,
         carving: &std::collections::BTreeMap<catmap::training::FieldKey, catmap::field::free_space::CarveCounts>,
+        priors: &std::collections::BTreeMap<catmap::training::FieldKey, catmap::objects::hidden_space::PriorCells>,
         categories: CategoryHistory<'_>,
     ) -> Self {
         use catmap::training::FieldKey;
@@ -78,6 +83,7 @@ impl TrainingReport {
                     state: p.state,
                     converged_at: p.converged_at,
                     carving_share: carving.get(key).filter(|c| c.inside > 0).map(|c| c.share()),
+                    prior_cells: priors.get(key).copied(),
                     ended: match key {
                         FieldKey::Category(n) => categories.retired.iter().find(|r| r.id == *n).cloned(),
                         _ => None,
@@ -166,6 +172,7 @@ mod tests {
             state: FieldState::Training,
             converged_at: None,
             carving_share: None,
+            prior_cells: None,
             ended,
         };
         let dropped = RetiredField {

@@ -70,6 +70,22 @@ fn the_readmes_quick_look_maps_the_small_preset_and_says_where_to_look() {
             .all(|o| o["bounds"]["world_from_box"]["translation"].is_array()),
         "each object's box and pose: {objects:?}"
     );
+    // The priors of objects alone in their class: the table, the stool and the lamp report the
+    // cells they drew from, the three chairs (completed by their twins) none.
+    let fields = &summary["training"]["fields"];
+    for object in objects {
+        let name = object["class_name"].as_str().expect("a class name");
+        let cells = &fields[format!("object {}", object["id"])]["prior_cells"];
+        if name == "chair" {
+            assert!(cells.is_null(), "a chair takes no prior: {cells}");
+        } else {
+            let (hidden, free) = (cells["hidden"].as_u64(), cells["seen_free"].as_u64());
+            assert!(
+                hidden.zip(free).is_some_and(|(h, f)| h + f > 0 && h + f <= 4096),
+                "the {name}'s prior cells: {cells}"
+            );
+        }
+    }
 }
 
 /// Runs `catmap run --dataset DATASET --out OUT [more]`; its stderr, after asserting that it

@@ -103,9 +103,10 @@ fn rays_of_other_objects_last_skip_the_colour_branch_and_keep_the_gradients() {
 }
 
 #[test]
-fn prior_rays_of_the_solid_and_support_priors_match_candle_autograd() {
+fn prior_rays_of_the_solid_support_and_seen_free_priors_match_candle_autograd() {
     // The step's rays as the sampler returns them with priors: pixel rays, then rays whose
-    // samples are asked to be solid (hidden cells) or empty (under the box), weighted 0.7.
+    // samples are asked to be solid (hidden cells) or empty (under the box, around cells seen
+    // free), weighted 0.7.
     for backend in [Backend::detect(), Backend::Scalar] {
         let (mut batch, samples) = setup(7, &[32, 32], 30, 10, backend);
         let with_priors: Vec<RaySamples> = samples
@@ -113,10 +114,10 @@ fn prior_rays_of_the_solid_and_support_priors_match_candle_autograd() {
             .map(|mut s| {
                 let n = s.num_rays();
                 for (r, state) in s.states.iter_mut().enumerate().skip(n - 12) {
-                    *state = if r % 3 == 0 {
-                        PixelState::BelowSupport
-                    } else {
-                        PixelState::HiddenSolid
+                    *state = match r % 3 {
+                        0 => PixelState::BelowSupport,
+                        1 => PixelState::SeenFree,
+                        _ => PixelState::HiddenSolid,
                     };
                 }
                 s.depth_m[n - 12..].fill(0.0);
