@@ -6,6 +6,7 @@ pub mod classes;
 pub mod config;
 pub mod decode_guard;
 pub mod images;
+pub mod live_replay;
 pub mod replica;
 pub mod resize;
 pub mod scannet;

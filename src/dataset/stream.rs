@@ -1,6 +1,7 @@
 //! The frame stream: a reader thread decodes frames from a [`FrameSource`] and sends them over a
 //! bounded channel, so decoding overlaps mapping and the reader never runs more than
-//! `capacity` frames ahead (the channel applies backpressure; nothing is dropped).
+//! `capacity` frames ahead (the channel applies backpressure; nothing is dropped). A live replay
+//! at a sensor's rate, which drops what the mapper cannot take, is [`super::live_replay`].
 
 use std::sync::Arc;
 use std::thread::JoinHandle;
@@ -38,6 +39,10 @@ pub struct StreamStats {
     pub decode_time: Duration,
     /// Time spent blocked on a full channel (the mapper was slower than the reader).
     pub blocked_time: Duration,
+    /// Frames a live replay dropped unseen because a newer one arrived first
+    /// ([`super::live_replay`]; 0 otherwise).
+    #[serde(default)]
+    pub frames_dropped: u64,
 }
 
 /// Which dataset positions to stream: every `stride`-th, at most `max_frames` of them.
@@ -76,6 +81,41 @@ impl FrameStream {
             let _ = handle.join();
         }
     }
+
+    /// A stream of the reader thread `handle` sending into `receiver`'s channel.
+    pub(crate) fn from_parts(receiver: Receiver<StreamMessage>, handle: JoinHandle<()>) -> Self {
+        Self {
+            receiver,
+            handle: Some(handle),
+        }
+    }
+}
+
+/// Decodes the frame at `position` of `source` into its message (a frame, or a skip naming the
+/// reason), counting it and the time it took in `stats`.
+pub(crate) fn decode_message(source: &dyn FrameSource, position: usize, stats: &mut StreamStats) -> StreamMessage {
+    let started = Instant::now();
+    let message = match source.read_frame(position) {
+        Ok(frame) => match frame.validate() {
+            Ok(()) => {
+                stats.frames_sent += 1;
+                StreamMessage::Frame(Arc::new(frame))
+            }
+            Err(reason) => {
+                stats.frames_skipped += 1;
+                StreamMessage::Skipped { position, reason }
+            }
+        },
+        Err(e) => {
+            stats.frames_skipped += 1;
+            StreamMessage::Skipped {
+                position,
+                reason: e.to_string(),
+            }
+        }
+    };
+    stats.decode_time += started.elapsed();
+    message
 }
 
 /// Decodes `positions` of `source` in order and sends them; ends with `End`.
@@ -83,27 +123,7 @@ impl FrameStream {
 pub fn read_into(source: &dyn FrameSource, positions: &[usize], sender: &Sender<StreamMessage>) {
     let mut stats = StreamStats::default();
     for &position in positions {
-        let started = Instant::now();
-        let message = match source.read_frame(position) {
-            Ok(frame) => match frame.validate() {
-                Ok(()) => {
-                    stats.frames_sent += 1;
-                    StreamMessage::Frame(Arc::new(frame))
-                }
-                Err(reason) => {
-                    stats.frames_skipped += 1;
-                    StreamMessage::Skipped { position, reason }
-                }
-            },
-            Err(e) => {
-                stats.frames_skipped += 1;
-                StreamMessage::Skipped {
-                    position,
-                    reason: e.to_string(),
-                }
-            }
-        };
-        stats.decode_time += started.elapsed();
+        let message = decode_message(source, position, &mut stats);
         let waiting = Instant::now();
         if sender.send(message).is_err() {
             return;
@@ -114,7 +134,7 @@ pub fn read_into(source: &dyn FrameSource, positions: &[usize], sender: &Sender<
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use nalgebra::Isometry3;
 
     use super::*;
@@ -123,7 +143,7 @@ mod tests {
     use crate::sensor::frame::{CameraIntrinsics, InstanceMask, RgbdFrame};
 
     /// Tiny frames; position 2 fails to decode.
-    struct Fake(usize);
+    pub(crate) struct Fake(pub usize);
 
     impl FrameSource for Fake {
         fn len(&self) -> usize {
