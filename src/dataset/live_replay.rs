@@ -53,11 +53,10 @@ fn replay_into(
     let mut stats = StreamStats::default();
     let start = Instant::now();
     for (k, &position) in positions.iter().enumerate() {
-        let message = decode_message(source, position, &mut stats);
+        let mut message = decode_message(source, position, &mut stats);
         if let Some(early) = release_time(k, fps).checked_sub(start.elapsed()) {
             std::thread::sleep(early);
         }
-        let mut message = message;
         loop {
             match sender.try_send(message) {
                 Ok(()) => break,

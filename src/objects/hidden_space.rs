@@ -259,25 +259,26 @@ impl HiddenSpace {
 
     /// A point drawn uniformly from the hidden cells (world frame), `None` when there are none.
     pub fn draw(&self, rng: &mut impl Rng) -> Option<Point3<f32>> {
-        if self.centres.is_empty() {
-            return None;
-        }
-        let centre = self.centres[rng.random_range(0..self.centres.len())];
-        let jitter = Vector3::from_fn(|a, _| (rng.random::<f32>() - 0.5) * self.cell_size[a]);
-        Some(self.world_from_box * (centre + jitter))
+        self.draw_around(&self.centres, 1.0, rng)
     }
 
-    /// A point drawn near a cell seen free (world frame), `None` when there is none: within
-    /// [`FREE_DRAW_SPREAD`] of a cell's edge around its centre. The view saw the centre free, by
-    /// the cell's half diagonal before the surface on the centre's pixel; the cell's corners lie
-    /// on other pixels, which may see something nearer (a lamp's 3 cm base in the bottom of a
-    /// 10 cm cell).
+    /// A point drawn near a cell seen free (world frame), `None` when there is none: in the
+    /// span [`FREE_DRAW_SPREAD`] × the cell's edges around a free cell's centre. The view saw
+    /// the centre free, by the cell's half diagonal before the surface on the centre's pixel;
+    /// the cell's corners lie on other pixels, which may see something nearer (a lamp's 3 cm
+    /// base in the bottom of a 10 cm cell).
     pub fn draw_free(&self, rng: &mut impl Rng) -> Option<Point3<f32>> {
-        if self.free_centres.is_empty() {
+        self.draw_around(&self.free_centres, FREE_DRAW_SPREAD, rng)
+    }
+
+    /// A point drawn uniformly in the span `spread` × the cell's edges around one of `centres`
+    /// (box frame), in the world frame; `None` without centres.
+    fn draw_around(&self, centres: &[Point3<f32>], spread: f32, rng: &mut impl Rng) -> Option<Point3<f32>> {
+        if centres.is_empty() {
             return None;
         }
-        let centre = self.free_centres[rng.random_range(0..self.free_centres.len())];
-        let jitter = Vector3::from_fn(|a, _| (rng.random::<f32>() - 0.5) * FREE_DRAW_SPREAD * self.cell_size[a]);
+        let centre = centres[rng.random_range(0..centres.len())];
+        let jitter = Vector3::from_fn(|a, _| (rng.random::<f32>() - 0.5) * spread * self.cell_size[a]);
         Some(self.world_from_box * (centre + jitter))
     }
 

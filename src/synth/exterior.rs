@@ -133,9 +133,13 @@ fn covered(piece: &[Point3<f32>; 3], others: &[&Part]) -> bool {
     let Some(normal) = normal_of(piece) else {
         return true;
     };
-    let [a, b, c] = piece;
-    let probe = Point3::from((a.coords + b.coords + c.coords) / 3.0) + normal * PUSH_OUT_M;
+    let probe = centroid(piece) + normal * PUSH_OUT_M;
     others.iter().any(|o| o.holds(&probe))
+}
+
+/// The centre of a triangle.
+fn centroid([a, b, c]: &[Point3<f32>; 3]) -> Point3<f32> {
+    Point3::from((a.coords + b.coords + c.coords) / 3.0)
 }
 
 /// The outward unit normal of a triangle, if it has an area.
@@ -145,8 +149,7 @@ fn normal_of([a, b, c]: &[Point3<f32>; 3]) -> Option<Vector3<f32>> {
 
 /// Whether the piece's centre, pushed one cell out, lies in the reachable space.
 fn reached(piece: &[Point3<f32>; 3], space: &ReachableSpace) -> bool {
-    let centre = Point3::from((piece[0].coords + piece[1].coords + piece[2].coords) / 3.0);
-    normal_of(piece).is_some_and(|n| space.contains(&(centre + n * REACH_CELL_M)))
+    normal_of(piece).is_some_and(|n| space.contains(&(centroid(piece) + n * REACH_CELL_M)))
 }
 
 /// Whether the triangle's centre and its corners (pulled a tenth of the way in), pushed one
@@ -155,7 +158,7 @@ fn reach_agrees(corners: &[Point3<f32>; 3], space: &ReachableSpace) -> bool {
     let Some(n) = normal_of(corners) else {
         return true;
     };
-    let centre = Point3::from((corners[0].coords + corners[1].coords + corners[2].coords) / 3.0);
+    let centre = centroid(corners);
     let at_centre = space.contains(&(centre + n * REACH_CELL_M));
     corners
         .iter()
@@ -224,10 +227,7 @@ mod tests {
     #[test]
     fn the_nightstands_hollow_goes_and_its_inset_drawer_fronts_stay() {
         let surface = Design::Nightstand.surface();
-        let centre = |t: usize| {
-            let [a, b, c] = surface.corners(t);
-            Point3::from((a.coords + b.coords + c.coords) / 3.0)
-        };
+        let centre = |t: usize| centroid(&surface.corners(t));
         // The hollow behind the drawer fronts: x within the side panels, y between the back
         // panel and the fronts, z between the bottom and top panels.
         let in_hollow =
