@@ -9,7 +9,7 @@ mod phases;
 mod rerun;
 
 pub use crate::checkpoint::CheckpointConfig;
-pub use crate::dataset::config::{DatasetConfig, StreamConfig};
+pub use crate::dataset::config::{DatasetConfig, LiveConfig, StreamConfig};
 pub use crate::field::FieldConfig;
 pub use crate::field::category::{CategoryFieldConfig, CategoryRayBudget};
 pub use crate::meshing::MeshConfig;
@@ -105,6 +105,9 @@ impl MapperConfig {
         }
         if self.stream.stride == 0 {
             return bad("stream.stride must be at least 1");
+        }
+        if let Some(reason) = self.stream.live.invalid() {
+            return bad(reason);
         }
         if self.dataset.depth_scale.is_nan() || self.dataset.depth_scale <= 0.0 {
             return bad("dataset.depth_scale must be positive");

@@ -86,6 +86,16 @@ impl MapperConfig {
         }
     }
 
+    /// The run's phases: the training after the stream, and whether fields and category fields
+    /// train while streaming (`catmap::training::run_phase`).
+    pub fn phase_plan(&self) -> crate::training::PhasePlan {
+        crate::training::PhasePlan {
+            after_stream: self.after_stream(),
+            trains_online: self.fields.enabled && !self.fields.offline,
+            categories: self.category_fields.enabled,
+        }
+    }
+
     /// The step counts this config sets away from their defaults that its schedule never runs:
     /// the fast schedule (online) ends the training after the stream on convergence or at
     /// `schedule.max_steps_after_stream`, in one phase that trains the category fields too, so

@@ -14,6 +14,59 @@ pub struct StreamConfig {
     pub stride: usize,
     /// Stop after this many frames (after striding); `None` = all.
     pub max_frames: Option<usize>,
+    /// Live replay (`catmap run --live`).
+    pub live: LiveConfig,
+}
+
+/// Live replay: the dataset streams at a sensor's rate, the mapper takes the newest frame and
+/// trains in the time there is (`catmap::training::live_clock`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LiveConfig {
+    /// Replay at the sensor's rate instead of waiting for the mapper (`--live`).
+    pub enabled: bool,
+    /// Frames per second of the replay (`--fps`); unset: 30 (none of the readers has
+    /// timestamps).
+    pub fps: Option<f64>,
+    /// Seconds of training after the last frame, before the final meshes.
+    pub finish_seconds: f64,
+    /// Least share of a tick that trains when the frames come faster than the mapper can take
+    /// them (the rest maps the frame: masks, clouds, registration).
+    pub min_train_share: f64,
+}
+
+impl LiveConfig {
+    /// The replay's rate when none is set.
+    pub const DEFAULT_FPS: f64 = 30.0;
+
+    /// The replay's frames per second.
+    pub fn fps(&self) -> f64 {
+        self.fps.unwrap_or(Self::DEFAULT_FPS)
+    }
+
+    /// Why the live settings are invalid, if they are.
+    pub fn invalid(&self) -> Option<&'static str> {
+        if self.fps.is_some_and(|f| !(f > 0.0 && f <= 1000.0)) {
+            Some("stream.live.fps must be above 0 and at most 1000")
+        } else if !(self.finish_seconds >= 0.0 && self.finish_seconds <= 86_400.0) {
+            Some("stream.live.finish_seconds must be between 0 and 86400")
+        } else if !(0.0..=0.9).contains(&self.min_train_share) {
+            Some("stream.live.min_train_share must be between 0 and 0.9")
+        } else {
+            None
+        }
+    }
+}
+
+impl Default for LiveConfig {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            fps: None,
+            finish_seconds: 10.0,
+            min_train_share: 0.5,
+        }
+    }
 }
 
 impl Default for StreamConfig {
@@ -23,6 +76,7 @@ impl Default for StreamConfig {
             frames_per_tick: 1,
             stride: 1,
             max_frames: None,
+            live: LiveConfig::default(),
         }
     }
 }

@@ -4,6 +4,7 @@
 //! at a sensor's rate, which drops what the mapper cannot take, is [`super::live_replay`].
 
 use std::sync::Arc;
+use std::sync::atomic::AtomicU64;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -57,6 +58,9 @@ pub fn stream_positions(len: usize, stride: usize, max_frames: Option<usize>) ->
 pub struct FrameStream {
     /// Messages in stream order; the last one is [`StreamMessage::End`].
     pub receiver: Receiver<StreamMessage>,
+    /// Frames a live replay has dropped so far (always 0 otherwise; the end's
+    /// [`StreamStats::frames_dropped`] holds the total).
+    pub dropped: Arc<AtomicU64>,
     handle: Option<JoinHandle<()>>,
 }
 
@@ -69,10 +73,7 @@ impl FrameStream {
             .name("catmap-reader".to_owned())
             .spawn(move || read_into(source.as_ref(), &positions, &sender))
             .expect("the OS can start one thread");
-        Self {
-            receiver,
-            handle: Some(handle),
-        }
+        Self::from_parts(receiver, Arc::default(), handle)
     }
 
     /// Waits for the reader thread to finish (after the receiver has seen `End` or was dropped).
@@ -83,9 +84,14 @@ impl FrameStream {
     }
 
     /// A stream of the reader thread `handle` sending into `receiver`'s channel.
-    pub(crate) fn from_parts(receiver: Receiver<StreamMessage>, handle: JoinHandle<()>) -> Self {
+    pub(crate) fn from_parts(
+        receiver: Receiver<StreamMessage>,
+        dropped: Arc<AtomicU64>,
+        handle: JoinHandle<()>,
+    ) -> Self {
         Self {
             receiver,
+            dropped,
             handle: Some(handle),
         }
     }

@@ -5,8 +5,10 @@
 pub mod config;
 pub mod facts;
 pub mod field_progress;
+pub mod live_clock;
 pub mod phase_end;
 pub mod plateau;
+pub mod run_phase;
 pub mod scheduler;
 
 pub use config::ScheduleConfig;
@@ -15,6 +17,8 @@ pub use facts::{
     object_field_facts, takes_shape_priors,
 };
 pub use field_progress::{FieldProgress, FieldState};
+pub use live_clock::{LiveClock, TickKind};
 pub use phase_end::PhaseEnd;
 pub use plateau::{LossWindow, PlateauConfig};
+pub use run_phase::{CHUNK_STEPS, FinishClock, PhasePlan, RunPhase, TickBudget, TickSteps};
 pub use scheduler::{BatchPlan, SchedulePolicy, StepScheduler};

@@ -10,6 +10,8 @@ pub enum PhaseEnd {
     Converged,
     /// The phase's step cap was reached.
     StepCap,
+    /// A live run's finishing time after the stream (`stream.live.finish_seconds`) was spent.
+    FinishTime,
 }
 
 impl PhaseEnd {

@@ -2,7 +2,7 @@
 //! beside it shows the objects alone, with their subcategory boxes — the representative
 //! labelled "rep" — and uncertainty spheres); on the right the camera's view with its instance
 //! masks, and one time series per training quantity (field losses, steps, the carving share),
-//! so that convergence shows at a glance.
+//! so that convergence shows at a glance, and a live stream's frames per second and drops.
 //! Entity paths come from [`crate::rerun_paths`].
 
 use rerun::blueprint::{
@@ -27,6 +27,8 @@ pub mod titles {
     pub const STEPS: &str = "Field steps";
     /// The share of each field's box samples that carved free space.
     pub const CARVING: &str = "Carving share";
+    /// A live stream's frames taken per second and frames dropped.
+    pub const STREAM: &str = "Live stream";
 }
 
 /// The mapper's viewer layout.
@@ -52,6 +54,9 @@ pub fn mapper_blueprint() -> Blueprint {
         series(titles::LOSS, OwnerEntity::Loss),
         series(titles::STEPS, OwnerEntity::Steps),
         series(titles::CARVING, OwnerEntity::CarvingShare),
+        TimeSeriesView::new(titles::STREAM)
+            .with_origin(format!("/{}", paths::STREAM))
+            .into(),
     ])
     .into();
     let side = Vertical::new([camera, plots]).with_row_shares([1.0, 1.0]).into();

@@ -23,9 +23,9 @@ use crate::components::{
 };
 use crate::resources::CategoryFields;
 use crate::resources::{
-    CategoryIndex, Fields, ObjectIndex, PhaseProgress, Settings, StageTimes, StreamProgress, TrainingQueue,
-    TrainingSchedule,
+    CategoryIndex, Fields, ObjectIndex, Settings, StageTimes, StreamProgress, TrainingQueue, TrainingSchedule,
 };
+use crate::run_state::PhaseProgress;
 
 /// An entity's field: slot, generator and losses.
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -7,6 +7,7 @@
 // The ECS data, the stages, and the one schedule that orders them.
 pub mod components;
 pub mod resources;
+pub mod run_state;
 pub mod schedule;
 pub mod stages;
 
@@ -20,6 +21,7 @@ pub mod training_report;
 
 // Rerun: the entity paths logged to, the viewer layout, and recording files.
 pub mod blueprint;
+pub mod recording;
 pub mod rerun_paths;
 pub mod rrd_file;
 

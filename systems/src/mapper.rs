@@ -4,7 +4,6 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use bevy_ecs::prelude::*;
-use bevy_ecs::system::RunSystemOnce;
 use catmap::dataset::stream::{StreamMessage, StreamStats};
 use catmap::meshing::MapMeshes;
 use catmap::objects::keyframes::KeyframeWindow;
@@ -17,21 +16,21 @@ use crate::checkpoint::SavedMapper;
 use crate::components::{
     Background, Category, FieldLoss, FieldSlot, Keyframes, Object, ObjectCloud, ObjectRng, VisibleFrames,
 };
+use crate::recording::Rerun;
 use crate::resources::CategoryFields;
 use crate::resources::{
-    CategoryIndex, Fields, FrameInbox, ObjectIndex, PhaseProgress, Settings, SmallInstances, StageTimes,
-    StreamProgress, TrainingQueue, TrainingSchedule,
+    CategoryIndex, Fields, FinalMeshes, FrameInbox, ObjectIndex, Settings, SmallInstances, StageTimes, StreamProgress,
+    TrainingQueue, TrainingSchedule,
 };
-use crate::schedule::{build_after_stream_schedule, build_category_schedule, build_schedule, build_training_schedule};
+use crate::run_state::{CurrentPhase, LiveTicks, PhaseProgress, TickRecord};
+use crate::schedule::build_schedule;
 use crate::snapshot::MapSnapshot;
-use crate::stages::log_rerun::{Rerun, log_final_meshes, log_world_setup};
-use crate::stages::meshes::{final_meshes, map_meshes, warn_missing_meshes};
+use crate::stages::log_rerun::log_world_setup;
 
-mod after_stream;
-mod phase_chunks;
 mod run;
 
-pub use run::{RunOutcome, RunPhase, RunProgress};
+pub use catmap::training::{CHUNK_STEPS, RunPhase};
+pub use run::{RunOutcome, RunProgress};
 
 /// Errors of the mapper facade.
 #[derive(Debug, thiserror::Error)]
@@ -47,9 +46,6 @@ pub enum MapperError {
         /// What is wrong.
         reason: String,
     },
-    /// A one-shot system of the mapper could not run (one of its resources is missing).
-    #[error("{0}")]
-    System(String),
     /// `push` was called on a mapper fed by a reader thread, or after the end of the stream.
     #[error("this mapper does not accept pushed frames: {0}")]
     NotAccepting(&'static str),
@@ -59,18 +55,9 @@ pub enum MapperError {
 pub struct Mapper {
     world: World,
     schedule: Schedule,
-    training: Schedule,
-    category_training: Schedule,
-    after_stream: Schedule,
     /// Sending end for `push`; `None` when a reader thread feeds the inbox, or after `end_stream`.
     pusher: Option<Sender<StreamMessage>>,
-    /// Whether the category phase has run its first chunk (which creates the category fields).
-    category_phase_started: bool,
 }
-
-/// Training steps per chunk of the phases after the stream (progress and checkpoints happen
-/// between chunks).
-pub const CHUNK_STEPS: u64 = 50;
 
 impl Mapper {
     /// A mapper fed by [`Mapper::push`].
@@ -110,20 +97,30 @@ impl Mapper {
         world.init_resource::<StageTimes>();
         world.init_resource::<SmallInstances>();
         world.init_resource::<PhaseProgress>();
+        world.insert_resource(CurrentPhase(RunPhase::Stream));
+        world.init_resource::<TickRecord>();
+        world.init_resource::<FinalMeshes>();
+        if world.resource::<Settings>().0.stream.live.enabled {
+            world.insert_resource(LiveTicks::new(std::sync::Arc::default()));
+        }
         Ok(Self {
             world,
             schedule: build_schedule(),
-            training: build_training_schedule(),
-            category_training: build_category_schedule(),
-            after_stream: build_after_stream_schedule(),
             pusher: None,
-            category_phase_started: false,
         })
     }
 
     /// The configuration the mapper runs with.
     pub fn config(&self) -> &MapperConfig {
         &self.world.resource::<Settings>().0
+    }
+
+    /// A live mapper (`stream.live.enabled`) reads the reader's dropped frames from `dropped`
+    /// (`FrameStream::dropped`) for its once-a-second report.
+    pub fn count_drops_from(&mut self, dropped: std::sync::Arc<std::sync::atomic::AtomicU64>) {
+        if let Some(mut live) = self.world.get_resource_mut::<LiveTicks>() {
+            live.dropped = dropped;
+        }
     }
 
     /// Logs to `recording` from now on (the `Log` stage only runs with a recording).
@@ -207,7 +204,13 @@ impl Mapper {
         let mut mapper = Self::with_inbox(saved.config().clone(), inbox)?;
         let (state, tensors, file) = saved.into_parts();
         crate::checkpoint::restore(&mut mapper.world, state, tensors, &file)?;
-        mapper.category_phase_started = mapper.world.resource::<PhaseProgress>().category_steps > 0;
+        let progress = *mapper.world.resource::<PhaseProgress>();
+        let phase = mapper.config().phase_plan().resumed(
+            mapper.stream_ended(),
+            progress.after_stream_end,
+            (progress.category_steps, progress.category_end),
+        );
+        mapper.world.insert_resource(CurrentPhase(phase));
         Ok(mapper)
     }
 
@@ -268,16 +271,18 @@ impl Mapper {
         self.world.resource::<TrainingQueue>().steps_done
     }
 
-    /// Meshes every field at final resolution (logged to Rerun when recording) and returns them;
-    /// warns about every object left without a mesh.
+    /// The final meshes (every field at final resolution, logged to Rerun when recording; a
+    /// warning names every object left without a mesh), taken from the map: those the run's
+    /// meshing phase made, or — for a mapper fed by `push` whose run did not get there — made now,
+    /// the run ending here. Empty without fields, and for a second call.
     pub fn extract_final_meshes(&mut self) -> Result<MapMeshes, MapperError> {
-        let meshes = self.world.run_system_once(final_meshes).map_err(system_error)?;
-        self.world
-            .run_system_once_with(log_final_meshes, meshes.as_slice())
-            .map_err(system_error)?;
-        let meshes = map_meshes(meshes);
-        warn_missing_meshes(&mut self.world, &meshes);
-        Ok(meshes)
+        if self.phase() < RunPhase::Meshing {
+            self.world.insert_resource(CurrentPhase(RunPhase::Meshing));
+        }
+        if self.phase() == RunPhase::Meshing {
+            self.step();
+        }
+        Ok(self.world.resource_mut::<FinalMeshes>().take_map().unwrap_or_default())
     }
 
     /// Every class's subcategories as registered so far (see `categories.json`).
@@ -320,9 +325,4 @@ impl Mapper {
     pub fn world_mut(&mut self) -> &mut World {
         &mut self.world
     }
-}
-
-/// A one-shot system's failure as the mapper's error.
-fn system_error(e: bevy_ecs::system::RunSystemError) -> MapperError {
-    MapperError::System(e.to_string())
 }

@@ -32,6 +32,12 @@ pub const INSTANCES: &str = "world/camera/image/instances";
 pub const BACKGROUND: &str = "world/background";
 /// Root of the training's time series.
 pub const TRAINING: &str = "training";
+/// A live stream's scalars.
+pub const STREAM: &str = "stream";
+/// A live stream's frames taken per second (scalar, once a second).
+pub const STREAM_RATE: &str = "stream/frames_per_second";
+/// A live stream's frames dropped so far (scalar, once a second).
+pub const STREAM_DROPPED: &str = "stream/frames_dropped";
 
 /// The stream's timeline: the newest frame's index.
 pub const FRAME_TIMELINE: &str = "frame";

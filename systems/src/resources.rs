@@ -182,51 +182,6 @@ pub struct TrainingQueue {
     pub steps_done: u64,
 }
 
-/// How far the phases after the stream have come, so that a resumed run continues where it
-/// stopped.
-#[derive(Resource, Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct PhaseProgress {
-    /// Steps of the training after the stream (offline training or online refinement) done.
-    pub after_stream_steps: u64,
-    /// Steps of the category phase done.
-    pub category_steps: u64,
-    /// Why the training after the stream ended, once it has.
-    #[serde(default)]
-    pub after_stream_end: Option<catmap::training::PhaseEnd>,
-    /// Why the category phase ended, once it has.
-    #[serde(default)]
-    pub category_end: Option<catmap::training::PhaseEnd>,
-}
-
-/// The phases after the stream, as [`PhaseProgress`] keeps them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum AfterStreamPhase {
-    /// The training after the stream (offline training, refinement, or the fast schedule's phase).
-    First,
-    /// The category phase.
-    Category,
-}
-
-impl PhaseProgress {
-    /// Steps done in `phase` and why it ended, once it has.
-    pub fn of(&self, phase: AfterStreamPhase) -> (u64, Option<catmap::training::PhaseEnd>) {
-        match phase {
-            AfterStreamPhase::First => (self.after_stream_steps, self.after_stream_end),
-            AfterStreamPhase::Category => (self.category_steps, self.category_end),
-        }
-    }
-
-    /// Records `steps` more steps of `phase`, and why it ended (`None`: it goes on).
-    pub fn advance(&mut self, phase: AfterStreamPhase, steps: u64, end: Option<catmap::training::PhaseEnd>) {
-        let (done, ended) = match phase {
-            AfterStreamPhase::First => (&mut self.after_stream_steps, &mut self.after_stream_end),
-            AfterStreamPhase::Category => (&mut self.category_steps, &mut self.category_end),
-        };
-        *done += steps;
-        *ended = end;
-    }
-}
-
 /// The step scheduler (which fields take the next steps; each field's steps and losses) and
 /// the size of its latest plans.
 #[derive(Resource, Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -290,6 +245,40 @@ impl std::ops::Deref for CategoryFields {
 impl std::ops::DerefMut for CategoryFields {
     fn deref_mut(&mut self) -> &mut CategoryFieldSet {
         &mut self.set
+    }
+}
+
+/// A mesh extracted from a field, with the entity that owns it.
+#[derive(Debug, Clone)]
+pub struct OwnerMesh {
+    /// The object's or the background's entity.
+    pub entity: Entity,
+    /// The object's id; `None` for the background.
+    pub object: Option<ObjectId>,
+    /// The mesh (world coordinates).
+    pub mesh: catmap::geometry::mesh::TriangleMesh,
+    /// Which field it was extracted from.
+    pub source: catmap::training::MeshSource,
+}
+
+/// The final meshes, once the run's meshing phase made them (taken by
+/// `Mapper::extract_final_meshes`).
+#[derive(Resource, Debug, Clone, Default)]
+pub struct FinalMeshes(pub Option<Vec<OwnerMesh>>);
+
+impl FinalMeshes {
+    /// Takes the meshes as the map's: objects by id, and the background's.
+    pub fn take_map(&mut self) -> Option<catmap::meshing::MapMeshes> {
+        let mut map = catmap::meshing::MapMeshes::default();
+        for OwnerMesh { object, mesh, .. } in self.0.take()? {
+            match object {
+                Some(id) => {
+                    map.objects.insert(id, mesh);
+                }
+                None => map.background = Some(mesh),
+            }
+        }
+        Some(map)
     }
 }
 

@@ -1,8 +1,14 @@
-//! The one place where stage order is defined.
+//! The one place where the order of everything is defined: the stages of a tick, and which
+//! phase of the run each runs in (`catmap::training::RunPhase`, kept as the [`CurrentPhase`]
+//! resource and moved on by the tick's last stage).
 
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, SingleThreadedExecutor};
+use catmap::training::RunPhase;
 
+use crate::recording::Rerun;
+use crate::resources::Settings;
+use crate::run_state::{CurrentPhase, LiveTicks, TickRecord};
 use crate::stages::categorize::update_categories;
 use crate::stages::category_fields::{sync_category_fields, train_category_fields};
 use crate::stages::cleanup::despawn_consumed_frames;
@@ -11,19 +17,21 @@ use crate::stages::ingest::ingest_frames;
 use crate::stages::log_camera::log_camera_frames;
 use crate::stages::log_categories::log_category_training;
 use crate::stages::log_rerun::{
-    Rerun, log_field_losses, log_field_meshes, log_instance_legend, log_memberships, log_object_boxes,
+    log_field_losses, log_field_meshes, log_final_meshes, log_instance_legend, log_memberships, log_object_boxes,
     log_object_clouds,
 };
-use crate::stages::meshes::extract_preview_meshes;
+use crate::stages::log_stream::log_live_stream;
+use crate::stages::meshes::{extract_preview_meshes, final_meshes, warn_missing_meshes};
 use crate::stages::register::register_categories;
 use crate::stages::segment::observe_frames;
+use crate::stages::tick::{advance_run_phase, queue_tick_steps, start_tick_clock, stop_train_clock};
 use crate::stages::track::{record_background_views, record_object_views, spawn_new_objects};
-use crate::stages::train::{attach_fields, queue_online_steps, train_fields};
+use crate::stages::train::{attach_fields, train_fields};
 
 /// The mapper's stages, in the order they run each tick.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum MapperSystems {
-    /// Frames leave the stream.
+    /// Frames leave the stream (while streaming).
     Ingest,
     /// Masks are split into per-object observations.
     Segment,
@@ -33,20 +41,26 @@ pub enum MapperSystems {
     Map,
     /// Category membership follows object classes.
     Categorize,
-    /// Fields appear for objects with a box; queued training steps run.
+    /// Fields appear for objects with a box; the steps the phase plans for the tick run.
     Train,
-    /// Classes are (re-)registered: representatives, subcategories, NOCS frames.
+    /// Classes are (re-)registered: representatives, subcategories, NOCS frames; category
+    /// fields follow where the phase trains them.
     Register,
-    /// Preview meshes every few frames.
+    /// Preview meshes every few frames (while streaming).
     Mesh,
     /// Rerun logging (only when a `Rerun` resource exists).
     Log,
     /// Consumed frames are despawned.
     Cleanup,
+    /// The final meshes (the meshing phase).
+    FinalMeshes,
+    /// The tick's phase records its progress; the run moves to the next phase.
+    Phase,
 }
 
 /// Builds the mapper's schedule: single-threaded (rayon parallelises inside systems), with
-/// ambiguity detection as an error so that every order is stated here.
+/// ambiguity detection as an error so that every order is stated here. One schedule serves
+/// every phase of the run; run conditions on [`CurrentPhase`] choose what a tick does.
 pub fn build_schedule() -> Schedule {
     let mut schedule = Schedule::default();
     schedule.set_executor(SingleThreadedExecutor::new());
@@ -66,12 +80,36 @@ pub fn build_schedule() -> Schedule {
             MapperSystems::Mesh,
             MapperSystems::Log,
             MapperSystems::Cleanup,
+            MapperSystems::FinalMeshes,
+            MapperSystems::Phase,
         )
             .chain(),
     );
+    // Objects get fields and classes register while frames come and in the training after
+    // them; the camera and the map are logged while streaming.
+    let (adding, streaming) = (
+        in_phase(&[RunPhase::Stream, RunPhase::AfterStream]),
+        in_phase(&[RunPhase::Stream]),
+    );
+    schedule.configure_sets(
+        (
+            MapperSystems::Ingest,
+            MapperSystems::Segment,
+            MapperSystems::Track,
+            MapperSystems::Map,
+            MapperSystems::Categorize,
+            MapperSystems::Mesh,
+            MapperSystems::Cleanup,
+        )
+            .run_if(streaming.clone()),
+    );
+    schedule.configure_sets(MapperSystems::Train.run_if(in_phase(TRAINING)));
     schedule.configure_sets(MapperSystems::Log.run_if(resource_exists::<Rerun>));
+    schedule.configure_sets(MapperSystems::FinalMeshes.run_if(meshing));
     schedule.add_systems((
-        ingest_frames.in_set(MapperSystems::Ingest),
+        (start_tick_clock.run_if(resource_exists::<LiveTicks>), ingest_frames)
+            .chain()
+            .in_set(MapperSystems::Ingest),
         observe_frames.in_set(MapperSystems::Segment),
         (spawn_new_objects, record_object_views, record_background_views)
             .chain()
@@ -80,82 +118,81 @@ pub fn build_schedule() -> Schedule {
             .chain()
             .in_set(MapperSystems::Map),
         update_categories.in_set(MapperSystems::Categorize),
-        (attach_fields, queue_online_steps, train_fields, train_category_fields)
+        (
+            attach_fields.run_if(adding.clone()),
+            queue_tick_steps,
+            train_fields,
+            train_category_fields,
+            stop_train_clock.run_if(resource_exists::<LiveTicks>),
+        )
             .chain()
             .in_set(MapperSystems::Train),
-        (register_categories, sync_category_fields.run_if(online_category_mode))
+        (
+            register_categories.run_if(adding.clone()),
+            sync_category_fields.run_if(category_fields_follow),
+        )
             .chain()
             .in_set(MapperSystems::Register),
         extract_preview_meshes.in_set(MapperSystems::Mesh),
         (
-            log_camera_frames,
-            log_instance_legend,
-            log_object_clouds,
-            log_object_boxes,
-            log_field_losses,
-            log_field_meshes,
-            log_memberships,
+            (
+                log_camera_frames,
+                log_instance_legend,
+                log_object_clouds,
+                log_object_boxes,
+            )
+                .chain()
+                .run_if(streaming.clone()),
+            log_field_losses.run_if(adding.clone()),
+            log_field_meshes.run_if(streaming),
+            log_memberships.run_if(adding.clone()),
+            log_category_training.run_if(category_fields_trained_after_stream),
         )
             .chain()
             .in_set(MapperSystems::Log),
-        despawn_consumed_frames.in_set(MapperSystems::Cleanup),
-    ));
-    schedule
-}
-
-/// Whether category fields follow the registrations while streaming (category mode, online).
-fn online_category_mode(settings: Res<crate::resources::Settings>) -> bool {
-    settings.0.category_fields.enabled && !settings.0.fields.offline
-}
-
-/// The schedule of offline training: fields for objects that lack one, the queued steps, and
-/// loss logging.
-pub fn build_training_schedule() -> Schedule {
-    let mut schedule = Schedule::default();
-    schedule.set_executor(SingleThreadedExecutor::new());
-    schedule.add_systems((
-        (attach_fields, train_fields, register_categories).chain(),
-        (log_field_losses, log_memberships)
-            .chain()
-            .after(register_categories)
-            .run_if(resource_exists::<Rerun>),
-    ));
-    schedule
-}
-
-/// The category phase: category fields from the registered subcategories, then their steps
-/// beside the per-object fields' (objects outside any category field keep training).
-pub fn build_category_schedule() -> Schedule {
-    let mut schedule = Schedule::default();
-    schedule.set_executor(SingleThreadedExecutor::new());
-    schedule.add_systems((
-        (sync_category_fields, ApplyDeferred, train_fields, train_category_fields).chain(),
-        log_category_training
-            .after(train_category_fields)
-            .run_if(resource_exists::<Rerun>),
-    ));
-    schedule
-}
-
-/// The fast schedule's phase after the stream (online, category mode): the per-object and the
-/// category fields train together as the step scheduler plans; classes still due are
-/// registered and the category fields follow the registrations.
-pub fn build_after_stream_schedule() -> Schedule {
-    let mut schedule = Schedule::default();
-    schedule.set_executor(SingleThreadedExecutor::new());
-    schedule.add_systems((
         (
-            attach_fields,
-            train_fields,
-            train_category_fields,
-            register_categories,
-            sync_category_fields,
+            log_live_stream.run_if(resource_exists::<LiveTicks>),
+            despawn_consumed_frames,
         )
-            .chain(),
-        (log_field_losses, log_memberships, log_category_training)
             .chain()
-            .after(sync_category_fields)
-            .run_if(resource_exists::<Rerun>),
+            .in_set(MapperSystems::Cleanup),
+        (
+            final_meshes,
+            log_final_meshes.run_if(resource_exists::<Rerun>),
+            warn_missing_meshes,
+        )
+            .chain()
+            .in_set(MapperSystems::FinalMeshes),
+        advance_run_phase.in_set(MapperSystems::Phase),
     ));
     schedule
+}
+
+/// The phases whose ticks train.
+const TRAINING: &[RunPhase] = &[
+    RunPhase::Stream,
+    RunPhase::AfterStream,
+    RunPhase::CategorySetup,
+    RunPhase::Categories,
+];
+
+/// Whether the run is in one of `phases`.
+fn in_phase(phases: &'static [RunPhase]) -> impl FnMut(Res<CurrentPhase>) -> bool + Clone {
+    move |phase| phases.contains(&phase.0)
+}
+
+/// Whether the category fields follow the registrations in this phase
+/// (`catmap::training::PhasePlan::category_fields_follow`).
+fn category_fields_follow(settings: Res<Settings>, phase: Res<CurrentPhase>) -> bool {
+    settings.0.phase_plan().category_fields_follow(phase.0)
+}
+
+/// Whether this tick, after the stream, trained the category fields.
+fn category_fields_trained_after_stream(phase: Res<CurrentPhase>, record: Res<TickRecord>) -> bool {
+    phase.0 != RunPhase::Stream && record.steps.categories > 0
+}
+
+/// Whether the run meshes its fields now (a map without fields has nothing to mesh).
+fn meshing(settings: Res<Settings>, phase: Res<CurrentPhase>) -> bool {
+    phase.0 == RunPhase::Meshing && settings.0.fields.enabled
 }

@@ -73,6 +73,10 @@ pub struct RunSummary {
     /// What became of each step after the map was made (`recording`: the recording's
     /// completion, `eval`: the evaluation). A failure here never fails the run.
     pub finishing_steps: BTreeMap<String, StepOutcome>,
+    /// A live run's stream (`catmap run --live`): its rate, frames taken and dropped, and the
+    /// seconds from the stream's end to the final meshes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub live: Option<LiveSummary>,
     /// The whole configuration the run used (defaults, config file and command line resolved),
     /// the same tree as `catmap config` prints.
     pub config: Option<catmap::MapperConfig>,
@@ -173,6 +177,7 @@ impl RunSummary {
             peak_resident_mib: catmap::process_memory::peak_resident_mib(),
             training: None,
             finishing_steps: BTreeMap::new(),
+            live: None,
             config: None,
         }
     }
@@ -298,4 +303,17 @@ mod tests {
         let err = read_object_classes(&dir.path().join("nope")).expect_err("no file");
         assert!(format!("{err:#}").contains("nope"), "{err:#}");
     }
+}
+
+/// What a live run's stream did.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LiveSummary {
+    /// Frames per second of the replay.
+    pub fps: f64,
+    /// Frames the mapper took.
+    pub frames_taken: u64,
+    /// Frames dropped because a newer one arrived before the mapper could take them.
+    pub frames_dropped: u64,
+    /// Seconds from the stream's end (its last tick) to the final meshes.
+    pub seconds_after_stream: f64,
 }

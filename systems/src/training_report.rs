@@ -63,7 +63,7 @@ impl TrainingReport {
     pub fn new(
         schedule: catmap::training::SchedulePolicy,
         scheduler: &catmap::training::StepScheduler,
-        phases: &crate::resources::PhaseProgress,
+        phases: &crate::run_state::PhaseProgress,
         carving: &std::collections::BTreeMap<catmap::training::FieldKey, catmap::field::free_space::CarveCounts>,
         priors: &std::collections::BTreeMap<catmap::training::FieldKey, catmap::objects::hidden_space::PriorCells>,
         categories: CategoryHistory<'_>,
@@ -108,6 +108,7 @@ impl TrainingReport {
         let ended = |end: Option<catmap::training::PhaseEnd>| match end {
             Some(catmap::training::PhaseEnd::Converged) => "every field converged",
             Some(catmap::training::PhaseEnd::StepCap) => "step cap reached",
+            Some(catmap::training::PhaseEnd::FinishTime) => "live finishing time spent",
             None => "–",
         };
         let _ = writeln!(

@@ -78,6 +78,15 @@ pub struct RunArgs {
     /// `categories.subcategories.enabled`, on]
     #[arg(long, value_enum)]
     pub subcategories: Option<Switch>,
+    /// Live mapping: replay the dataset at the sensor's rate (--fps) instead of waiting for the
+    /// mapper; the mapper takes the newest frame (older ones are dropped and counted), trains in
+    /// the time there is, and after the last frame trains `stream.live.finish_seconds` more
+    /// before the final meshes. Live runs keep no checkpoint.
+    #[arg(long)]
+    pub live: bool,
+    /// Frames per second of the live replay [default: the config's `stream.live.fps`, else 30]
+    #[arg(long, requires = "live")]
+    pub fps: Option<f64>,
     /// Continue the interrupted run whose output folder is DIR (from `DIR/checkpoint`), with the
     /// settings it started with; other options are ignored.
     #[arg(long, value_name = "DIR")]
@@ -181,6 +190,10 @@ fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
     if let Some(max_frames) = args.max_frames {
         config.stream.max_frames = Some(max_frames);
     }
+    config.stream.live.enabled |= args.live;
+    if let Some(fps) = args.fps {
+        config.stream.live.fps = Some(fps);
+    }
     match args.mode {
         MapMode::Category => {
             config.categories.enabled = true;
@@ -280,6 +293,26 @@ mod tests {
             SchedulePolicy::Paper,
             "offline is the paper's protocol"
         );
+    }
+
+    #[test]
+    fn live_is_off_by_default_and_takes_its_rate_from_fps() {
+        assert!(!config_of(&[]).stream.live.enabled);
+        let live = config_of(&["--live", "--fps", "5"]).stream.live;
+        assert!(live.enabled);
+        assert_eq!(live.fps(), 5.0);
+        assert_eq!(
+            config_of(&["--live"]).stream.live.fps(),
+            30.0,
+            "no timestamps: 30 frames/s"
+        );
+        assert!(
+            Cli::try_parse_from(["catmap", "--fps", "5"]).is_err(),
+            "--fps needs --live"
+        );
+        let cli = Cli::try_parse_from(["catmap", "--live", "--fps", "0"]).expect("arguments parse");
+        let err = config_from_args(&cli.args).expect_err("a rate of 0");
+        assert!(format!("{err:#}").contains("stream.live.fps"), "{err:#}");
     }
 
     #[test]

@@ -16,7 +16,13 @@ use crate::cli::run_plan::{Recording, RunPlan};
 
 /// Writes every output of a finished mapper; errors only when the map's own outputs cannot be
 /// written.
-pub fn write_outputs(mut mapper: Mapper, plan: &RunPlan, dataset_name: String, started: Instant) -> anyhow::Result<()> {
+pub fn write_outputs(
+    mut mapper: Mapper,
+    plan: &RunPlan,
+    dataset_name: String,
+    started: Instant,
+    live: Option<catmap_systems::summary::LiveSummary>,
+) -> anyhow::Result<()> {
     let config = mapper.config().clone();
     let meshes_dir = if config.fields.enabled {
         let path = plan.out.join("categories.json");
@@ -51,6 +57,7 @@ pub fn write_outputs(mut mapper: Mapper, plan: &RunPlan, dataset_name: String, s
     summary.config = Some(config.clone());
     summary.training_steps = training_steps;
     summary.training = Some(training);
+    summary.live = live;
     summary
         .finishing_steps
         .insert("recording".to_owned(), complete_recording(plan));

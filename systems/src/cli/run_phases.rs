@@ -38,6 +38,11 @@ pub fn resume(out: &Path) -> anyhow::Result<()> {
         .with_context(|| format!("cannot resume from {} (no usable checkpoint)", dir.display()))?;
     let plan: RunPlan = serde_json::from_str(saved.extra())
         .with_context(|| format!("{}: the run plan is unreadable", dir.display()))?;
+    anyhow::ensure!(
+        !saved.config().stream.live.enabled,
+        "{}: a live run cannot be resumed (the clock chose its frames); start it again",
+        dir.display()
+    );
     tracing::info!(checkpoint = %dir.display(), at = saved.label(), "resuming");
     let source = plan.open_source(saved.config())?;
     drive(Start::Resumed(Box::new(saved)), plan, source, started)
@@ -57,10 +62,17 @@ pub fn drive(start: Start, plan: RunPlan, source: Arc<dyn FrameSource>, started:
         Start::Fresh(_) => (0, false),
         Start::Resumed(saved) => (saved.positions_consumed().min(positions.len()), saved.stream_ended()),
     };
+    let live = &config.stream.live;
     let stream = (!ended).then(|| {
-        tracing::info!(dataset = %source.name(), frames = positions.len(), from = consumed, "mapping");
         let rest = positions[consumed..].to_vec();
-        FrameStream::spawn(Arc::clone(&source), rest, config.stream.channel_capacity)
+        if live.enabled {
+            let fps = live.fps();
+            tracing::info!(dataset = %source.name(), frames = positions.len(), fps, "mapping live");
+            FrameStream::spawn_live(Arc::clone(&source), rest, fps)
+        } else {
+            tracing::info!(dataset = %source.name(), frames = positions.len(), from = consumed, "mapping");
+            FrameStream::spawn(Arc::clone(&source), rest, config.stream.channel_capacity)
+        }
     });
     let inbox = stream
         .as_ref()
@@ -69,23 +81,47 @@ pub fn drive(start: Start, plan: RunPlan, source: Arc<dyn FrameSource>, started:
         Start::Fresh(config) => Mapper::with_inbox(*config, inbox)?,
         Start::Resumed(saved) => Mapper::from_checkpoint(*saved, inbox)?,
     };
-    let mut checkpoints = Checkpoints::new(&plan, config.checkpoint.clone(), started);
+    let dropped = stream.as_ref().map(|s| Arc::clone(&s.dropped));
+    if let Some(dropped) = &dropped {
+        mapper.count_drops_from(Arc::clone(dropped));
+    }
+    let mut checkpoints = Checkpoints::new(&plan, config.checkpoint.clone(), started, live.enabled);
     if let Some(recording) = plan.open_recording(positions.len(), &config.rerun)? {
         mapper.set_recording(recording);
     }
-    let mut bars = PhaseBars::new(&config, positions.len() as u64);
+    let mut bars = PhaseBars::new(&config, positions.len() as u64, dropped);
+    let mut last_stream_tick = Instant::now();
     while let RunOutcome::Paused(at) = mapper.run(|progress| {
+        if progress.phase == RunPhase::Stream {
+            last_stream_tick = Instant::now();
+        }
         bars.show(progress);
         checkpoints.break_if(progress)
     }) {
         let label = match at.phase {
             RunPhase::Stream => format!("frame {} of {}", mapper.positions_consumed(), positions.len()),
             RunPhase::AfterStream => format!("{}, {} steps", bars.after_stream, mapper.training_steps()),
-            RunPhase::Categories => "category fields".to_owned(),
+            _ => "category fields".to_owned(),
         };
         checkpoints.save(&mut mapper, &label)?;
     }
     bars.finish();
+    let after_stream = last_stream_tick.elapsed().as_secs_f64();
+    let live = live.enabled.then(|| catmap_systems::summary::LiveSummary {
+        fps: live.fps(),
+        frames_taken: mapper.stream_stats().map_or(0, |s| s.frames_sent),
+        frames_dropped: mapper.stream_stats().map_or(0, |s| s.frames_dropped),
+        seconds_after_stream: after_stream,
+    });
+    if let Some(live) = &live {
+        tracing::info!(
+            "live at {} frames/s: {} frames taken, {} dropped; final meshes {:.1} s after the stream's end",
+            live.fps,
+            live.frames_taken,
+            live.frames_dropped,
+            live.seconds_after_stream
+        );
+    }
     if let Some(stream) = stream {
         stream.join();
     }
@@ -95,7 +131,7 @@ pub fn drive(start: Start, plan: RunPlan, source: Arc<dyn FrameSource>, started:
             "category fields trained"
         );
     }
-    crate::cli::run_outputs::write_outputs(mapper, &plan, source.name(), started)?;
+    crate::cli::run_outputs::write_outputs(mapper, &plan, source.name(), started, live)?;
     checkpoints.remove_after_success();
     Ok(())
 }
@@ -109,6 +145,8 @@ struct PhaseBars {
     frames: u64,
     /// What the phase after the stream is called.
     after_stream: &'static str,
+    /// A live replay's dropped frames so far (the stream's bar counts frames taken or dropped).
+    dropped: Option<Arc<std::sync::atomic::AtomicU64>>,
 }
 
 /// The bar of the phase running.
@@ -123,7 +161,7 @@ struct PhaseBar {
 }
 
 impl PhaseBars {
-    fn new(config: &catmap::MapperConfig, frames: u64) -> Self {
+    fn new(config: &catmap::MapperConfig, frames: u64, dropped: Option<Arc<std::sync::atomic::AtomicU64>>) -> Self {
         let after_stream = match (config.fields.offline, config.after_stream().first) {
             (true, _) => "training",
             (false, FirstPhase::ObjectFields) => "refining",
@@ -133,7 +171,15 @@ impl PhaseBars {
             current: None,
             frames,
             after_stream,
+            dropped: dropped.filter(|_| config.stream.live.enabled),
         }
+    }
+
+    /// Frames the live replay dropped so far (0 when not live).
+    fn dropped(&self) -> u64 {
+        self.dropped
+            .as_ref()
+            .map_or(0, |d| d.load(std::sync::atomic::Ordering::Relaxed))
     }
 
     /// Shows `progress`, starting its phase's bar when the phase changed.
@@ -146,7 +192,7 @@ impl PhaseBars {
             self.finish();
             let cap = match progress.phase {
                 RunPhase::Stream => self.frames,
-                RunPhase::AfterStream | RunPhase::Categories => progress.cap.unwrap_or(0),
+                _ => progress.cap.unwrap_or(0),
             };
             let what = self.name(progress.phase);
             self.current = Some(PhaseBar {
@@ -157,8 +203,13 @@ impl PhaseBars {
                 done: progress.done,
             });
         }
+        let dropped = if progress.phase == RunPhase::Stream {
+            self.dropped()
+        } else {
+            0
+        };
         if let Some(current) = &mut self.current {
-            current.bar.set_position(progress.done);
+            current.bar.set_position(progress.done + dropped);
             current.done = progress.done;
         }
     }
@@ -168,7 +219,7 @@ impl PhaseBars {
         match phase {
             RunPhase::Stream => "mapping",
             RunPhase::AfterStream => self.after_stream,
-            RunPhase::Categories => "category fields",
+            _ => "category fields",
         }
     }
 
@@ -187,11 +238,18 @@ impl PhaseBars {
             let seconds = started.elapsed().as_secs_f64();
             let rate = done.saturating_sub(from) as f64 / seconds.max(1e-9);
             let what = self.name(phase);
-            match phase {
-                RunPhase::Stream => tracing::info!("{what}: {done} frames in {seconds:.1} s ({rate:.1} frames/s)"),
-                RunPhase::AfterStream | RunPhase::Categories => {
-                    tracing::info!("{what}: {done} steps in {seconds:.1} s ({rate:.1} steps/s)");
+            match (phase, &self.dropped) {
+                (RunPhase::Stream, None) => {
+                    tracing::info!("{what}: {done} frames in {seconds:.1} s ({rate:.1} frames/s)")
                 }
+                (RunPhase::Stream, Some(_)) => {
+                    let dropped = self.dropped();
+                    let share = 100.0 * dropped as f64 / (done + dropped).max(1) as f64;
+                    tracing::info!(
+                        "{what}: {done} frames taken in {seconds:.1} s ({rate:.1} frames/s), {dropped} dropped ({share:.0} %)"
+                    );
+                }
+                _ => tracing::info!("{what}: {done} steps in {seconds:.1} s ({rate:.1} steps/s)"),
             }
         }
     }
@@ -205,10 +263,12 @@ struct Checkpoints {
     /// When the last checkpoint was written (or the run or its resume started).
     last: Instant,
     interrupted: Arc<AtomicBool>,
+    /// Whether the run is live (no checkpoint: a live run cannot be resumed).
+    live: bool,
 }
 
 impl Checkpoints {
-    fn new(plan: &RunPlan, cfg: CheckpointConfig, started: Instant) -> Self {
+    fn new(plan: &RunPlan, cfg: CheckpointConfig, started: Instant, live: bool) -> Self {
         let interrupted = Arc::new(AtomicBool::new(false));
         let flag = Arc::clone(&interrupted);
         // A first Ctrl-C asks for a checkpoint at the next step; a second one quits at once.
@@ -226,6 +286,7 @@ impl Checkpoints {
             started,
             last: Instant::now(),
             interrupted,
+            live,
         }
     }
 
@@ -234,12 +295,12 @@ impl Checkpoints {
     fn break_if(&self, progress: RunProgress) -> ControlFlow<()> {
         let count = match progress.phase {
             RunPhase::Stream => RunCount::Frames(progress.done),
-            RunPhase::AfterStream | RunPhase::Categories => RunCount::Steps {
+            _ => RunCount::Steps {
                 done: progress.done,
                 chunk: catmap_systems::mapper::CHUNK_STEPS,
             },
         };
-        let due = self.cfg.is_due(count, self.last.elapsed().as_secs_f64());
+        let due = !self.live && self.cfg.is_due(count, self.last.elapsed().as_secs_f64());
         if due || self.interrupted.load(Ordering::SeqCst) {
             ControlFlow::Break(())
         } else {
@@ -250,6 +311,10 @@ impl Checkpoints {
     /// Writes a checkpoint (when enabled); after Ctrl-C, exits.
     fn save(&mut self, mapper: &mut Mapper, label: &str) -> anyhow::Result<()> {
         let interrupted = self.interrupted.load(Ordering::SeqCst);
+        if self.live {
+            tracing::warn!(at = label, "interrupted; a live run keeps no checkpoint");
+            std::process::exit(INTERRUPTED_EXIT);
+        }
         if self.cfg.enabled || interrupted {
             let dir = self.plan.checkpoint_dir();
             let plan = RunPlan {

@@ -1,30 +1,22 @@
-//! The one path through a run: the stream, then the training due after it, then the category
-//! phase — each resumable where it stopped (after a checkpoint, or in a restored mapper).
+//! The one path through a run: ticks of the one schedule until the run's phase
+//! ([`CurrentPhase`]) is done — the stream, the training due after it, the category phase, the
+//! final meshes — resumable where it stopped (after a checkpoint, or in a restored mapper).
 
 use std::ops::ControlFlow;
 use std::time::Duration;
 
+use catmap::training::RunPhase;
+use catmap::training::live_clock::IDLE_TICK_SECONDS;
+
 use super::Mapper;
-use crate::resources::{FrameInbox, StreamProgress};
+use crate::resources::{Fields, FrameInbox, Settings, StreamProgress, TrainingSchedule};
+use crate::run_state::{CurrentPhase, LiveTicks, PhaseProgress};
 
-/// The phases of a run, in order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub enum RunPhase {
-    /// Frames stream in; every frame queues its training steps.
-    Stream,
-    /// The training due once the stream has ended (`MapperConfig::after_stream`: the offline
-    /// training, the paper's refinement, or the fast schedule's one phase of every field).
-    AfterStream,
-    /// The category phase (`category_fields.enabled`, unless the fast schedule trained the
-    /// category fields in the phase before).
-    Categories,
-}
-
-/// How far a run has come, reported after every step of the stream and every chunk of
-/// [`super::CHUNK_STEPS`] training steps after it.
+/// How far a run has come, reported after every tick of the stream and of the phases after it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RunProgress {
-    /// The phase running.
+    /// The phase that ran: [`RunPhase::Stream`], [`RunPhase::AfterStream`] or
+    /// [`RunPhase::Categories`] (its setup tick included).
     pub phase: RunPhase,
     /// Frames ingested (stream), or steps of the phase done.
     pub done: u64,
@@ -35,7 +27,7 @@ pub struct RunProgress {
 /// How [`Mapper::run`] returned.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RunOutcome {
-    /// Every phase has run: the map is ready for its final meshes.
+    /// Every phase has run, the final meshing included (see [`Mapper::extract_final_meshes`]).
     Complete,
     /// The callback asked to pause here (e.g. for a checkpoint); `run` continues from it.
     Paused(RunProgress),
@@ -43,50 +35,83 @@ pub enum RunOutcome {
 
 impl Mapper {
     /// Runs the remaining phases — the stream until its end, the training after it, the
-    /// category phase — calling `on_progress` after every step of the stream and every chunk of
-    /// training; pauses when it breaks. A paused (or restored) mapper continues where it was.
+    /// category phase, the final meshing — calling `on_progress` after every tick but the
+    /// meshing's; pauses when it breaks. A paused (or restored) mapper continues where it was.
     pub fn run(&mut self, mut on_progress: impl FnMut(RunProgress) -> ControlFlow<()>) -> RunOutcome {
-        let mut paused = None;
-        let mut report = |progress: RunProgress| {
-            let flow = on_progress(progress);
-            if flow.is_break() {
-                paused = Some(progress);
+        loop {
+            let phase = self.phase();
+            if phase == RunPhase::Done {
+                return RunOutcome::Complete;
             }
-            flow
-        };
-        let complete = self.stream_until(&mut report)
-            && self.after_stream_until(&mut report)
-            && self.categories_until(&mut report);
-        match (complete, paused) {
-            (false, Some(progress)) => RunOutcome::Paused(progress),
-            _ => RunOutcome::Complete,
+            if phase == RunPhase::Stream && !self.frame_or_tick_due() {
+                continue;
+            }
+            self.step();
+            if let Some(progress) = self.progress_of(phase)
+                && on_progress(progress).is_break()
+                && self.phase() != RunPhase::Done
+            {
+                return RunOutcome::Paused(progress);
+            }
         }
     }
 
-    /// Steps until the stream ends or `on_step` breaks; returns whether the stream has ended.
-    fn stream_until(&mut self, on_step: &mut impl FnMut(RunProgress) -> ControlFlow<()>) -> bool {
-        while !self.stream_ended() {
-            let inbox = self.world.resource::<FrameInbox>().0.clone();
-            if inbox.is_empty() {
-                // Wait for the reader instead of spinning; the timeout keeps the loop responsive.
-                let mut select = crossbeam_channel::Select::new();
-                select.recv(&inbox);
-                let ready = select.ready_timeout(Duration::from_millis(100)).is_ok();
-                if !ready || !inbox.is_empty() {
-                    continue;
-                }
-                // Ready yet empty: the reader hung up without its end; a step lets ingest end the stream.
-            }
-            self.step();
-            let progress = RunProgress {
-                phase: RunPhase::Stream,
-                done: self.world.resource::<StreamProgress>().frames_ingested,
-                cap: None,
-            };
-            if on_step(progress).is_break() {
-                break;
-            }
+    /// The phase the next tick belongs to.
+    pub fn phase(&self) -> RunPhase {
+        self.world.resource::<CurrentPhase>().0
+    }
+
+    /// While streaming: whether a tick is due, waiting up to 100 ms for the reader otherwise. A
+    /// tick is due when a message waits (or the reader hung up without its end, which a tick's
+    /// ingest then records). Live, a tick is also due when there is training to do: the mapper
+    /// trains while it waits for frames; with nothing to train it waits up to
+    /// [`IDLE_TICK_SECONDS`] for a frame, then ticks anyway.
+    fn frame_or_tick_due(&self) -> bool {
+        let inbox = self.world.resource::<FrameInbox>().0.clone();
+        if !inbox.is_empty() {
+            return true;
         }
-        self.stream_ended()
+        let live = self.world.contains_resource::<LiveTicks>();
+        if live && self.has_training_to_do() {
+            return true;
+        }
+        let wait = if live {
+            Duration::from_secs_f64(IDLE_TICK_SECONDS)
+        } else {
+            Duration::from_millis(100)
+        };
+        let mut select = crossbeam_channel::Select::new();
+        select.recv(&inbox);
+        // Ready yet empty: the reader hung up without its end; a tick lets ingest end the stream.
+        select.ready_timeout(wait).is_ok() || live
+    }
+
+    /// Whether fields exist and the latest plan trained some.
+    fn has_training_to_do(&self) -> bool {
+        let schedule = self.world.resource::<TrainingSchedule>();
+        !self.world.resource::<Fields>().objects.is_empty()
+            && schedule.planned_objects + schedule.planned_categories > 0
+    }
+
+    /// The progress after a tick of `phase` (none for the meshing).
+    fn progress_of(&self, phase: RunPhase) -> Option<RunProgress> {
+        let plan = self.world.resource::<Settings>().0.phase_plan();
+        let reported = match phase {
+            RunPhase::Stream => {
+                return Some(RunProgress {
+                    phase,
+                    done: self.world.resource::<StreamProgress>().frames_ingested,
+                    cap: None,
+                });
+            }
+            RunPhase::AfterStream => RunPhase::AfterStream,
+            RunPhase::CategorySetup | RunPhase::Categories => RunPhase::Categories,
+            RunPhase::Meshing | RunPhase::Done => return None,
+        };
+        Some(RunProgress {
+            phase: reported,
+            done: self.world.resource::<PhaseProgress>().of(reported).0,
+            cap: plan.cap(reported),
+        })
     }
 }

@@ -7,8 +7,8 @@ use catmap::sensor::image_ops::{downscale_nearest, downscale_rgb};
 use catmap::{InstanceLabel, ObjectId, RgbdFrame};
 use image::ImageEncoder;
 
-use super::log_rerun::{Rerun, warn_on_error};
 use crate::components::CameraFrame;
+use crate::recording::{Rerun, warn_on_error};
 use crate::rerun_paths as paths;
 use crate::resources::Settings;
 

@@ -8,9 +8,9 @@ use bevy_ecs::prelude::*;
 
 use crate::components::CategorySlot;
 use crate::components::Object;
+use crate::recording::{Rerun, warn_on_error};
 use crate::rerun_paths::{self as paths, CATEGORY_TIMELINE, OwnerEntity};
 use crate::resources::CategoryFields;
-use crate::stages::log_rerun::{Rerun, warn_on_error};
 
 /// Logs the latest losses and code norms (after each chunk of category steps).
 pub fn log_category_training(rerun: Res<Rerun>, fields: Res<CategoryFields>, members: Query<(&Object, &CategorySlot)>) {

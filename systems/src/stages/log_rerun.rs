@@ -24,22 +24,9 @@ use catmap::{ClassId, ObjectId};
 use crate::components::{
     FieldLoss, FieldMesh, Membership, Object, ObjectBounds, ObjectClass, ObjectCloud, Reliability,
 };
+use crate::recording::{Rerun, warn_on_error};
 use crate::rerun_paths::{self as paths, OwnerEntity};
-use crate::resources::{Settings, StreamProgress};
-use crate::stages::meshes::OwnerMesh;
-
-/// The recording stream every log system writes to.
-#[derive(Resource, Clone)]
-pub struct Rerun(pub rerun::RecordingStream);
-
-impl Rerun {
-    /// Stamps what is logged next with frame `frame` and the wall clock (the `time` timeline).
-    pub fn at_frame(&self, frame: u64) {
-        self.0.set_time_sequence(paths::FRAME_TIMELINE, frame as i64);
-        self.0
-            .set_time(paths::WALL_CLOCK_TIMELINE, std::time::SystemTime::now());
-    }
-}
+use crate::resources::{FinalMeshes, Settings, StreamProgress};
 
 /// Logs the static view coordinates once.
 pub fn log_world_setup(rerun: &rerun::RecordingStream) {
@@ -174,21 +161,20 @@ pub fn log_field_meshes(
     }
 }
 
-/// Logs the final meshes when the mapper records (run once, by `Mapper::extract_final_meshes`),
-/// clustered on `rerun.final_mesh_cell_m` (the written .ply files keep every triangle).
+/// Logs the final meshes (the run's meshing phase), clustered on `rerun.final_mesh_cell_m`
+/// (the written .ply files keep every triangle).
 pub fn log_final_meshes(
-    InRef(meshes): InRef<[OwnerMesh]>,
-    rerun: Option<Res<Rerun>>,
+    rerun: Res<Rerun>,
+    finals: Res<FinalMeshes>,
     settings: Res<Settings>,
     progress: Res<StreamProgress>,
     memberships: Query<&Membership>,
 ) {
-    let Some(rerun) = rerun else { return };
     if let Some(frame) = progress.last_frame {
         rerun.at_frame(frame.0);
     }
     let cell = settings.0.rerun.final_mesh_cell_m;
-    for owned in meshes {
+    for owned in finals.0.iter().flatten() {
         let membership = memberships.get(owned.entity).ok();
         let mesh = owned.mesh.clustered(cell);
         log_owner_mesh(&rerun, owned.object, &mesh, owned.source, membership);
@@ -314,10 +300,4 @@ pub fn class_color(class: ClassId) -> [u8; 3] {
         [170, 110, 40],
     ];
     PALETTE[(class.0.wrapping_mul(2_654_435_761) >> 7) as usize % PALETTE.len()]
-}
-
-pub(crate) fn warn_on_error<E: std::fmt::Display>(result: Result<(), E>, path: &str) {
-    if let Err(e) = result {
-        tracing::warn!(path, error = %e, "Rerun logging failed");
-    }
 }

@@ -1,8 +1,8 @@
 //! Mesh stage: field meshes as previews every few frames, and at final resolution at the end.
 
 use bevy_ecs::prelude::*;
-use catmap::geometry::mesh::{Aabb, TriangleMesh};
-use catmap::meshing::{MapMeshes, ObjectFrame, ObjectMeshConfig, mesh_category_member, mesh_occupancy_field};
+use catmap::geometry::mesh::Aabb;
+use catmap::meshing::{ObjectFrame, ObjectMeshConfig, mesh_category_member, mesh_occupancy_field};
 use catmap::training::MeshSource;
 use catmap::{FrameIndex, ObjectId};
 use rayon::prelude::*;
@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use crate::components::CategorySlot;
 use crate::components::{Background, FieldLoss, FieldMesh, FieldSlot, Object, ObjectBounds, ObjectCloud};
 use crate::resources::CategoryFields;
-use crate::resources::{Fields, Settings, StageTimes, StreamProgress};
+use crate::resources::{Fields, FinalMeshes, OwnerMesh, Settings, SmallInstances, StageTimes, StreamProgress};
 
 /// Fields that can be meshed: objects with a box, and the background with its cloud (members
 /// of category fields are meshed from those instead).
@@ -28,19 +28,6 @@ type Meshable<'w, 's> = Query<
         &'static ObjectCloud,
     ),
 >;
-
-/// A mesh extracted from a field, with the entity that owns it.
-#[derive(Debug, Clone)]
-pub struct OwnerMesh {
-    /// The object's or the background's entity.
-    pub entity: Entity,
-    /// The object's id; `None` for the background.
-    pub object: Option<ObjectId>,
-    /// The mesh (world coordinates).
-    pub mesh: TriangleMesh,
-    /// Which field it was extracted from.
-    pub source: MeshSource,
-}
 
 /// Every `preview_every_frames` ingested frames, meshes each trained object field at the preview
 /// spacing into its [`FieldMesh`] (for live viewing; the background is only meshed at the end).
@@ -74,20 +61,21 @@ pub fn extract_preview_meshes(
 }
 
 /// Meshes every field at final resolution (`meshes.object`; the background at
-/// `meshes.background_voxel_m` over its cloud's bounds) and returns the meshes (run once, by
-/// `Mapper::extract_final_meshes`).
+/// `meshes.background_voxel_m` over its cloud's bounds) into [`FinalMeshes`] (the run's
+/// meshing phase).
 pub fn final_meshes(
     settings: Res<Settings>,
     fields: Res<Fields>,
     category_fields: Res<CategoryFields>,
     owners: Meshable,
     members: Query<(Entity, &Object, &CategorySlot)>,
+    mut finals: ResMut<FinalMeshes>,
     mut times: ResMut<StageTimes>,
-) -> Vec<OwnerMesh> {
+) {
     let _timer = times.start("meshes");
     let cfg = &settings.0.meshes;
     let meshes = mesh_fields(&fields, &owners, &cfg.object, &cfg.background(), MeshPass::Final);
-    with_category_members(meshes, &category_fields, &members, &cfg.object)
+    finals.0 = Some(with_category_members(meshes, &category_fields, &members, &cfg.object));
 }
 
 /// Which meshes a meshing pass makes.
@@ -180,30 +168,22 @@ fn mesh_fields(
         .collect()
 }
 
-/// The map's meshes: objects by id, and the background's.
-pub fn map_meshes(meshes: Vec<OwnerMesh>) -> MapMeshes {
-    let mut map = MapMeshes::default();
-    for OwnerMesh { object, mesh, .. } in meshes {
-        match object {
-            Some(id) => {
-                map.objects.insert(id, mesh);
-            }
-            None => map.background = Some(mesh),
-        }
-    }
-    map
-}
-
-/// Warns about a map without objects and about every object left without a final mesh (too
-/// little data to fit a box or train its field); returns the ids of the latter, sorted.
-pub fn warn_missing_meshes(world: &mut World, meshes: &MapMeshes) -> Vec<ObjectId> {
-    let mut ids: Vec<ObjectId> = world.query::<&Object>().iter(world).map(|o| o.id).collect();
+/// Warns about a map without objects, about instances never mapped because their 2D box was
+/// always too small, and about every object left without a final mesh (too little data to fit a
+/// box or train its field).
+pub fn warn_missing_meshes(
+    settings: Res<Settings>,
+    finals: Res<FinalMeshes>,
+    small: Res<SmallInstances>,
+    objects: Query<&Object>,
+) {
+    let mut ids: Vec<ObjectId> = objects.iter().map(|o| o.id).collect();
     ids.sort();
     if ids.is_empty() {
         tracing::warn!("the map has no objects: only the background is meshed");
     }
-    let min_side = world.resource::<crate::resources::Settings>().0.objects.min_box_side_px;
-    for (id, frames) in &world.resource::<crate::resources::SmallInstances>().0 {
+    let min_side = settings.0.objects.min_box_side_px;
+    for (id, frames) in &small.0 {
         if ids.binary_search(id).is_err() {
             tracing::warn!(
                 object = %id,
@@ -212,9 +192,8 @@ pub fn warn_missing_meshes(world: &mut World, meshes: &MapMeshes) -> Vec<ObjectI
             );
         }
     }
-    let missing: Vec<ObjectId> = ids.into_iter().filter(|id| !meshes.objects.contains_key(id)).collect();
-    for id in &missing {
+    let meshed: Vec<ObjectId> = finals.0.iter().flatten().filter_map(|m| m.object).collect();
+    for id in ids.iter().filter(|id| !meshed.contains(id)) {
         tracing::warn!(object = %id, "no mesh: too little data for this object");
     }
-    missing
 }

@@ -3,6 +3,7 @@
 //!
 //! | stage | file |
 //! |---|---|
+//! | the tick's clock, its steps, the run's next phase | `tick` |
 //! | frames leave the stream | `ingest` |
 //! | masks become per-object observations | `segment` |
 //! | objects appear and take in their views (class votes, keyframes) | `track` |
@@ -12,7 +13,7 @@
 //! | classes are registered, subcategories split | `register` |
 //! | category fields follow the subcategories and train | `category_fields` |
 //! | fields are meshed (previews, final) | `meshes` |
-//! | what changed is logged to Rerun | `log_rerun`, `log_camera`, `log_categories` |
+//! | what changed is logged to Rerun | `log_rerun`, `log_camera`, `log_categories`, `log_stream` |
 //! | the frame's entity is despawned | `cleanup` |
 
 pub mod categorize;
@@ -23,8 +24,10 @@ pub mod ingest;
 pub mod log_camera;
 pub mod log_categories;
 pub mod log_rerun;
+pub mod log_stream;
 pub mod meshes;
 pub mod register;
 pub mod segment;
+pub mod tick;
 pub mod track;
 pub mod train;

@@ -22,7 +22,7 @@ use crate::components::{
     Background, CameraFrame, Category, CategorySlot, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Object,
     ObjectBounds,
 };
-use crate::resources::{CategoryFields, Fields, Settings, StageTimes, StreamProgress, TrainingQueue, TrainingSchedule};
+use crate::resources::{Fields, Settings, StageTimes, StreamProgress, TrainingQueue, TrainingSchedule};
 
 /// Gives every object that has a box (and the background, once it has keyframes) its field,
 /// in object-id order so that batch indices do not depend on query order.
@@ -64,24 +64,6 @@ pub fn attach_fields(
         commands
             .entity(entity)
             .insert((FieldSlot { index, origin }, FieldRng(rng), FieldLoss::default()));
-    }
-}
-
-/// Online schedule: every frame ingested this tick queues `steps_per_frame` steps of the
-/// object fields and, in category mode, as many of the category fields.
-pub fn queue_online_steps(
-    settings: Res<Settings>,
-    frames: Query<(), Added<CameraFrame>>,
-    mut queue: ResMut<TrainingQueue>,
-    mut category: ResMut<CategoryFields>,
-) {
-    let cfg = &settings.0.fields;
-    if cfg.enabled && !cfg.offline {
-        let steps = frames.iter().count() as u64 * cfg.steps_per_frame as u64;
-        queue.pending += steps;
-        if settings.0.category_fields.enabled {
-            category.pending += steps;
-        }
     }
 }
 

@@ -8,6 +8,7 @@
 //!   log and in `summary.json`.
 //! - Kills (`kill_resume`): a run SIGKILLed at random moments and resumed each time ends like one
 //!   that was never interrupted, and every file on disk is whole after each kill.
+//! - Issue 32 (`live`): a live run that drops frames ends with whole outputs and lists its drops.
 //! - Issue 18: what a newcomer meets — the README's quick look prints what it promises and leaves
 //!   the files it lists; a dataset in the wrong layout, or none, is refused with the expected
 //!   files and the other format named, and leaves no output folder; `eval` on a folder without
@@ -181,4 +182,5 @@ fn assert_outputs_whole(out: &Path) {
 
 mod foreign;
 mod kill_resume;
+mod live;
 mod newcomer;

@@ -74,9 +74,9 @@ fn save_and_restore(mut mapper: Mapper, inbox: Receiver<StreamMessage>) -> Mappe
 /// The stop in `phase` after its first chunk, if any.
 fn stop_in(phase: RunPhase) -> Option<Stop> {
     match phase {
-        RunPhase::Stream => None,
         RunPhase::AfterStream => Some(Stop::AfterStream),
         RunPhase::Categories => Some(Stop::Categories),
+        _ => None,
     }
 }
 

@@ -145,6 +145,7 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         (titles::LOSS, "TimeSeries", "/training/loss"),
         (titles::STEPS, "TimeSeries", "/training/steps"),
         (titles::CARVING, "TimeSeries", "/training/carving_share"),
+        (titles::STREAM, "TimeSeries", "/stream"),
     ] {
         let view = blueprint
             .iter()
