@@ -30,8 +30,8 @@ pub struct LiveConfig {
     pub fps: Option<f64>,
     /// Seconds of training after the last frame, before the final meshes.
     pub finish_seconds: f64,
-    /// Least share of a tick that trains when the frames come faster than the mapper can take
-    /// them (the rest maps the frame: masks, clouds, registration).
+    /// Least share of the frame interval that a tick with a frame trains, when the frames come
+    /// faster than the mapper can map them (masks, clouds, registration).
     pub min_train_share: f64,
 }
 

@@ -2,14 +2,17 @@
 //!
 //! A camera does not wait for the mapper. A tick that takes a frame first maps it (masks,
 //! objects, clouds; afterwards registration, previews and logging), and trains in what is
-//! left of the frame's interval `1 / fps`. When the frames come faster than the mapper can map
-//! them, training still gets at least `min_train_share` of the tick, and the frames that
-//! arrive meanwhile are dropped by the reader (the mapper always takes the newest). A tick
-//! without a new frame trains for a short slice and looks again. After the stream the ticks
-//! train in slices until the finishing time is spent.
+//! left of the frame's interval `1 / fps`, but at least `min_train_share` of the interval: when
+//! the frames come faster than the mapper can map them, training keeps its share, and the frames
+//! that arrive meanwhile are dropped by the reader (the mapper always takes the newest). The
+//! floor is a share of the interval, not of the mapping time: a registration that took seconds
+//! does not make the next ticks train for seconds. A tick without a new frame trains for a
+//! short slice and looks again. After the stream the ticks train in slices until the finishing
+//! time is spent.
 //!
-//! The step's and the mapping's durations are running means of what earlier ticks measured,
-//! so the clock needs no calibration; until the first step is measured a tick trains one step.
+//! The step's and the mapping's durations are running means of what earlier ticks measured (a
+//! step's per kind of tick: a tick with a frame trains more fields, those seen in it), so the
+//! clock needs no calibration; until a step of the kind is measured a tick trains one step.
 
 use super::RunPhase;
 use crate::config::LiveConfig;
@@ -39,8 +42,11 @@ pub enum TickKind {
 /// Running means of a live run's step and mapping durations.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct LiveClock {
-    /// Seconds per training step (object batch and category fields together).
-    pub seconds_per_step: Option<f64>,
+    /// Seconds per training step (object batch and category fields together) in ticks that
+    /// took a frame.
+    pub seconds_per_frame_step: Option<f64>,
+    /// Seconds per training step in ticks without a frame.
+    pub seconds_per_idle_step: Option<f64>,
     /// Seconds a tick that takes a frame spends outside training.
     pub mapping_seconds: Option<f64>,
 }
@@ -50,7 +56,7 @@ impl LiveClock {
     /// spent on everything else.
     pub fn observe(&mut self, kind: TickKind, steps: u64, train_seconds: f64, other_seconds: f64) {
         if steps > 0 && train_seconds.is_finite() {
-            mean_in(&mut self.seconds_per_step, train_seconds / steps as f64);
+            mean_in(self.step_mean(kind), train_seconds / steps as f64);
         }
         if kind == TickKind::Frame && other_seconds.is_finite() {
             mean_in(&mut self.mapping_seconds, other_seconds.max(0.0));
@@ -64,8 +70,7 @@ impl LiveClock {
         match (phase, kind) {
             (RunPhase::Stream, TickKind::Frame) => {
                 let mapping = self.mapping_seconds.unwrap_or(0.0);
-                let share = cfg.min_train_share;
-                (interval - mapping).max(mapping * share / (1.0 - share))
+                (interval - mapping).max(cfg.min_train_share * interval)
             }
             (RunPhase::Stream, TickKind::Idle) => IDLE_TICK_SECONDS.min(interval),
             (RunPhase::AfterStream | RunPhase::Categories, _) => FINISH_TICK_SECONDS.min(finish_left.max(0.0)),
@@ -73,12 +78,24 @@ impl LiveClock {
         }
     }
 
-    /// Steps that fit in `seconds`: at least one, at most [`MAX_TICK_STEPS`]; one until a
-    /// step has been measured.
-    pub fn tick_steps(&self, seconds: f64) -> u64 {
-        match self.seconds_per_step {
+    /// Steps of a `kind` tick that fit in `seconds`: at least one, at most [`MAX_TICK_STEPS`];
+    /// one until a step of the kind has been measured.
+    pub fn tick_steps(&self, kind: TickKind, seconds: f64) -> u64 {
+        let step = match kind {
+            TickKind::Frame => self.seconds_per_frame_step,
+            TickKind::Idle => self.seconds_per_idle_step,
+        };
+        match step {
             Some(step) if step > 0.0 => ((seconds / step).floor() as u64).clamp(1, MAX_TICK_STEPS),
             _ => 1,
+        }
+    }
+
+    /// The running mean of a step's seconds in `kind` ticks.
+    fn step_mean(&mut self, kind: TickKind) -> &mut Option<f64> {
+        match kind {
+            TickKind::Frame => &mut self.seconds_per_frame_step,
+            TickKind::Idle => &mut self.seconds_per_idle_step,
         }
     }
 }
@@ -105,7 +122,8 @@ mod tests {
 
     fn measured(step: f64, mapping: f64) -> LiveClock {
         LiveClock {
-            seconds_per_step: Some(step),
+            seconds_per_frame_step: Some(step),
+            seconds_per_idle_step: Some(step / 2.0),
             mapping_seconds: Some(mapping),
         }
     }
@@ -115,14 +133,25 @@ mod tests {
         let clock = measured(0.01, 0.08);
         let seconds = clock.tick_seconds(RunPhase::Stream, TickKind::Frame, &live(5.0), 10.0);
         assert!((seconds - 0.12).abs() < 1e-9, "{seconds}");
-        assert_eq!(clock.tick_steps(seconds), 12);
+        assert_eq!(clock.tick_steps(TickKind::Frame, seconds), 12);
+        assert_eq!(
+            clock.tick_steps(TickKind::Idle, seconds),
+            24,
+            "idle steps train fewer fields"
+        );
     }
 
     #[test]
-    fn frames_faster_than_the_mapper_still_leave_training_its_share() {
+    fn frames_faster_than_the_mapper_still_leave_training_its_share_of_the_interval() {
         let clock = measured(0.01, 0.08);
-        let seconds = clock.tick_seconds(RunPhase::Stream, TickKind::Frame, &live(30.0), 10.0);
-        assert!((seconds - 0.08).abs() < 1e-9, "half of the tick trains: {seconds}");
+        let seconds = clock.tick_seconds(RunPhase::Stream, TickKind::Frame, &live(10.0), 10.0);
+        assert!((seconds - 0.05).abs() < 1e-9, "half of the interval trains: {seconds}");
+        let slow = measured(0.01, 2.0);
+        let seconds = slow.tick_seconds(RunPhase::Stream, TickKind::Frame, &live(2.0), 10.0);
+        assert!(
+            (seconds - 0.25).abs() < 1e-9,
+            "a long registration does not make training long: {seconds}"
+        );
     }
 
     #[test]
@@ -154,23 +183,36 @@ mod tests {
 
     #[test]
     fn steps_fit_the_time_between_one_and_the_cap_and_one_until_measured() {
-        assert_eq!(LiveClock::default().tick_steps(1.0), 1, "nothing measured yet");
+        assert_eq!(
+            LiveClock::default().tick_steps(TickKind::Frame, 1.0),
+            1,
+            "nothing measured yet"
+        );
         let clock = measured(0.01, 0.0);
-        assert_eq!(clock.tick_steps(0.0), 1);
-        assert_eq!(clock.tick_steps(0.055), 5);
-        assert_eq!(clock.tick_steps(1e6), MAX_TICK_STEPS);
+        assert_eq!(clock.tick_steps(TickKind::Frame, 0.0), 1);
+        assert_eq!(clock.tick_steps(TickKind::Frame, 0.055), 5);
+        assert_eq!(clock.tick_steps(TickKind::Frame, 1e6), MAX_TICK_STEPS);
     }
 
     #[test]
     fn the_means_follow_the_measurements() {
         let mut clock = LiveClock::default();
         clock.observe(TickKind::Frame, 10, 0.1, 0.05);
-        assert_eq!(clock, measured(0.01, 0.05), "the first measurement is the mean");
-        clock.observe(TickKind::Idle, 10, 0.2, 0.5);
-        let step = clock.seconds_per_step.expect("measured");
+        assert_eq!(
+            clock.seconds_per_frame_step,
+            Some(0.01),
+            "the first measurement is the mean"
+        );
+        assert_eq!(clock.mapping_seconds, Some(0.05));
+        assert_eq!(clock.seconds_per_idle_step, None, "no idle tick yet");
+        clock.observe(TickKind::Frame, 10, 0.2, 0.5);
+        let step = clock.seconds_per_frame_step.expect("measured");
         assert!((step - 0.012).abs() < 1e-12, "{step}");
-        assert_eq!(clock.mapping_seconds, Some(0.05), "an idle tick maps nothing");
+        clock.observe(TickKind::Idle, 10, 0.05, 3.0);
+        assert_eq!(clock.seconds_per_idle_step, Some(0.005));
+        let mapping = clock.mapping_seconds.expect("measured");
+        assert!((mapping - 0.14).abs() < 1e-12, "an idle tick maps nothing: {mapping}");
         clock.observe(TickKind::Frame, 0, 0.0, 0.1);
-        assert_eq!(clock.seconds_per_step, Some(step), "no step, no step time");
+        assert_eq!(clock.seconds_per_frame_step, Some(step), "no step, no step time");
     }
 }

@@ -31,6 +31,8 @@ use crate::stages::train::{attach_fields, train_fields};
 /// The mapper's stages, in the order they run each tick.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum MapperSystems {
+    /// A live tick starts its clock.
+    Tick,
     /// Frames leave the stream (while streaming).
     Ingest,
     /// Masks are split into per-object observations.
@@ -70,6 +72,7 @@ pub fn build_schedule() -> Schedule {
     });
     schedule.configure_sets(
         (
+            MapperSystems::Tick,
             MapperSystems::Ingest,
             MapperSystems::Segment,
             MapperSystems::Track,
@@ -107,9 +110,10 @@ pub fn build_schedule() -> Schedule {
     schedule.configure_sets(MapperSystems::Log.run_if(resource_exists::<Rerun>));
     schedule.configure_sets(MapperSystems::FinalMeshes.run_if(meshing));
     schedule.add_systems((
-        (start_tick_clock.run_if(resource_exists::<LiveTicks>), ingest_frames)
-            .chain()
-            .in_set(MapperSystems::Ingest),
+        start_tick_clock
+            .run_if(resource_exists::<LiveTicks>)
+            .in_set(MapperSystems::Tick),
+        ingest_frames.in_set(MapperSystems::Ingest),
         observe_frames.in_set(MapperSystems::Segment),
         (spawn_new_objects, record_object_views, record_background_views)
             .chain()

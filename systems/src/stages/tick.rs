@@ -42,7 +42,7 @@ pub fn queue_tick_steps(
             let seconds = live.clock.tick_seconds(phase.0, kind, &config.stream.live, finish_left);
             live.train_started = now;
             TickBudget::Clock {
-                steps: live.clock.tick_steps(seconds),
+                steps: live.clock.tick_steps(kind, seconds),
             }
         }
         None => TickBudget::Steps {
@@ -90,6 +90,7 @@ pub fn advance_run_phase(
         let tick = now.duration_since(live.tick_started).as_secs_f64();
         let train = live.train_seconds;
         let steps = record.steps.objects.max(record.steps.categories);
+        tracing::debug!(kind = ?record.kind, steps, train, other = tick - train, "live tick");
         live.clock.observe(record.kind, steps, train, tick - train);
         if phase.0 == RunPhase::Stream && next != RunPhase::Stream {
             let finish = std::time::Duration::from_secs_f64(settings.0.stream.live.finish_seconds);
