@@ -5,6 +5,8 @@ use crate::ids::ClassId;
 /// Replica classes the synthetic scenes use.
 pub mod replica {
     use crate::ids::ClassId;
+    /// Bed.
+    pub const BED: ClassId = ClassId(7);
     /// Box.
     pub const BOX: ClassId = ClassId(15);
     /// Cabinet.
@@ -17,6 +19,10 @@ pub mod replica {
     pub const LAMP: ClassId = ClassId(47);
     /// Nightstand.
     pub const NIGHTSTAND: ClassId = ClassId(54);
+    /// Shelf (a bookcase).
+    pub const SHELF: ClassId = ClassId(71);
+    /// Sofa.
+    pub const SOFA: ClassId = ClassId(76);
     /// Stool.
     pub const STOOL: ClassId = ClassId(78);
     /// Table.
@@ -40,12 +46,15 @@ pub fn is_replica_background(class: ClassId) -> bool {
 /// A short human name for the Replica classes catmap knows, for tables and logs.
 pub fn replica_name(class: ClassId) -> Option<&'static str> {
     Some(match class.0 {
+        7 => "bed",
         15 => "box",
         18 => "cabinet",
         20 => "chair",
         40 => "floor",
         47 => "lamp",
         54 => "nightstand",
+        71 => "shelf",
+        76 => "sofa",
         78 => "stool",
         80 => "table",
         93 => "wall",

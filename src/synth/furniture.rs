@@ -35,6 +35,24 @@ pub enum Design {
     Stool,
     /// Nightstand: carcass on short legs with two inset drawer fronts.
     Nightstand,
+    /// Three-seat sofa, 2.0 × 0.9 × 0.82 m: an upholstered base on short feet, three seat
+    /// cushions, a full-width back and two arms; stands with its back to a wall.
+    Sofa,
+    /// Double bed, 1.5 × 2.06 × 1.0 m: a frame on four legs 12 cm high, a mattress, a pillow and a
+    /// tall headboard; stands with its headboard to a wall.
+    Bed,
+    /// Bookcase, 0.9 × 0.32 × 1.8 m: open front, four shelves, a back panel, a plinth and books
+    /// on three shelves (not mirror-symmetric); stands with its back to a wall.
+    Bookcase,
+}
+
+/// Where a design goes in a room.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Placing {
+    /// Anywhere in the room's furniture region, at any yaw.
+    Anywhere,
+    /// With its back (the −y side of its frame) a few centimetres from a wall, facing the room.
+    AgainstWall,
 }
 
 const WOOD: [u8; 3] = [139, 94, 60];
@@ -43,7 +61,7 @@ const METAL_DARK: [u8; 3] = [48, 48, 54];
 
 impl Design {
     /// Every design, in a fixed order.
-    pub const ALL: [Design; 8] = [
+    pub const ALL: [Design; 11] = [
         Self::LadderBackChair,
         Self::Armchair,
         Self::DiningTable,
@@ -52,6 +70,9 @@ impl Design {
         Self::FloorLamp,
         Self::Stool,
         Self::Nightstand,
+        Self::Sofa,
+        Self::Bed,
+        Self::Bookcase,
     ];
 
     /// Stable snake_case name, as written to `scene.json`.
@@ -65,6 +86,9 @@ impl Design {
             Self::FloorLamp => "floor_lamp",
             Self::Stool => "stool",
             Self::Nightstand => "nightstand",
+            Self::Sofa => "sofa",
+            Self::Bed => "bed",
+            Self::Bookcase => "bookcase",
         }
     }
 
@@ -78,6 +102,17 @@ impl Design {
             Self::FloorLamp => replica::LAMP,
             Self::Stool => replica::STOOL,
             Self::Nightstand => replica::NIGHTSTAND,
+            Self::Sofa => replica::SOFA,
+            Self::Bed => replica::BED,
+            Self::Bookcase => replica::SHELF,
+        }
+    }
+
+    /// Where the design goes in a room: the large pieces stand against a wall.
+    pub fn placing(self) -> Placing {
+        match self {
+            Self::Sofa | Self::Bed | Self::Bookcase => Placing::AgainstWall,
+            _ => Placing::Anywhere,
         }
     }
 
@@ -97,6 +132,9 @@ impl Design {
             Self::FloorLamp => floor_lamp(),
             Self::Stool => stool(),
             Self::Nightstand => nightstand(),
+            Self::Sofa => sofa(),
+            Self::Bed => bed(),
+            Self::Bookcase => bookcase(),
         }
     }
 
@@ -243,6 +281,99 @@ fn nightstand() -> Vec<TriangleMesh> {
     parts
 }
 
+fn sofa() -> Vec<TriangleMesh> {
+    let (fabric, cushion, feet) = ([92, 98, 112], [112, 120, 136], [40, 32, 28]);
+    let mut parts = vec![
+        paint(block(0.0, 0.0, 0.08, [2.0, 0.9, 0.2]), fabric), // base, up to 0.28 m
+        paint(block(0.0, -0.35, 0.28, [1.76, 0.2, 0.54]), fabric), // back, up to 0.82 m
+    ];
+    for s in [-1.0, 1.0] {
+        parts.push(paint(block(s * 0.94, 0.0, 0.28, [0.12, 0.9, 0.34]), fabric)); // arm
+        for sy in [-1.0, 1.0] {
+            parts.push(paint(block(s * 0.92, sy * 0.38, 0.0, [0.06, 0.06, 0.08]), feet));
+        }
+    }
+    // Three seat cushions 2 cm apart, in front of the back and between the arms.
+    for k in [-1.0, 0.0, 1.0] {
+        parts.push(paint(block(k * 0.59, 0.08, 0.28, [0.57, 0.64, 0.13]), cushion));
+    }
+    parts
+}
+
+fn bed() -> Vec<TriangleMesh> {
+    let (linen, pillow) = ([214, 206, 190], [236, 233, 226]);
+    let mut parts = vec![
+        paint(block(0.0, 0.03, 0.12, [1.5, 2.0, 0.2]), WOOD), // frame, 12 cm above the floor
+        paint(block(0.0, 0.04, 0.32, [1.44, 1.94, 0.22]), linen), // mattress, up to 0.54 m
+        paint(block(0.0, -0.72, 0.54, [0.9, 0.4, 0.1]), pillow),
+        paint(block(0.0, -1.0, 0.0, [1.5, 0.06, 1.0]), WOOD), // headboard
+    ];
+    for sx in [-0.71, 0.71] {
+        for sy in [-0.92, 0.98] {
+            parts.push(paint(block(sx, sy, 0.0, [0.06, 0.06, 0.12]), WOOD));
+        }
+    }
+    parts
+}
+
+fn bookcase() -> Vec<TriangleMesh> {
+    let (board, back) = ([222, 214, 196], [200, 192, 176]);
+    let covers: [[u8; 3]; 5] = [
+        [150, 40, 40],
+        [40, 80, 140],
+        [60, 110, 60],
+        [200, 170, 60],
+        [90, 60, 110],
+    ];
+    let mut parts = vec![
+        paint(block(0.0, 0.0, 1.78, [0.9, 0.32, 0.02]), board),   // top
+        paint(block(0.0, 0.005, 0.0, [0.86, 0.31, 0.08]), board), // plinth
+        paint(block(0.0, -0.15, 0.08, [0.86, 0.02, 1.7]), back),  // back panel
+    ];
+    for s in [-1.0, 1.0] {
+        parts.push(paint(block(s * 0.44, 0.0, 0.0, [0.02, 0.32, 1.78]), board)); // side
+    }
+    for z in [0.44, 0.80, 1.16, 1.48] {
+        parts.push(paint(block(0.0, 0.01, z, [0.86, 0.30, 0.02]), board)); // shelf
+    }
+    // Books standing in rows from a start x on the plinth and two shelves, 22 cm deep, 1 cm in
+    // front of the back panel; a stack lying on the third shelf.
+    let rows: [(f32, f32, &[(f32, f32)]); 2] = [
+        (
+            0.08,
+            -0.42,
+            &[(0.05, 0.28), (0.04, 0.30), (0.06, 0.26), (0.04, 0.29), (0.05, 0.27)],
+        ),
+        (
+            0.46,
+            0.05,
+            &[
+                (0.06, 0.24),
+                (0.05, 0.27),
+                (0.05, 0.25),
+                (0.07, 0.28),
+                (0.06, 0.22),
+                (0.05, 0.26),
+            ],
+        ),
+    ];
+    let mut k = 0;
+    for (z, start, books) in rows {
+        let mut x = start;
+        for &(width, height) in books {
+            parts.push(paint(
+                block(x + width / 2.0, -0.02, z, [width, 0.22, height]),
+                covers[k % 5],
+            ));
+            x += width;
+            k += 1;
+        }
+    }
+    parts.push(paint(block(-0.12, -0.02, 0.82, [0.3, 0.22, 0.08]), covers[3]));
+    parts.push(paint(block(0.3, -0.02, 1.18, [0.08, 0.2, 0.25]), covers[1]));
+    parts
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -259,7 +390,7 @@ mod tests {
                 b.min.z
             );
             assert!(
-                e.x < 1.7 && e.y < 1.0 && e.z < 1.7,
+                e.x < 2.1 && e.y < 2.1 && e.z < 1.9,
                 "{} fits a room: {e:?}",
                 design.name()
             );

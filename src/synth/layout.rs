@@ -2,17 +2,19 @@
 //!
 //! Every design's parts' bounding boxes (in the object frame) are its collision shape. Two placed
 //! boxes collide when their height ranges overlap and their yawed footprints overlap (separating
-//! axis test with a 2 cm clearance). Placement is rejection sampling: the table first, then chairs
-//! pushed into slots around it (so their seats slide under the top while their backs stay out),
-//! then everything else anywhere in the room's furniture region.
+//! axis test with a 2 cm clearance). Placement is rejection sampling: first the designs that
+//! stand against a wall ([`Placing::AgainstWall`]: the back 6–10 cm from one of the three walls
+//! the camera faces, beyond the camera's strip), then the table, then chairs pushed into slots
+//! around it (so their seats slide under the top while their backs stay out), then everything
+//! else anywhere in the room's furniture region.
 
 use std::collections::BTreeMap;
-use std::f32::consts::TAU;
+use std::f32::consts::{FRAC_PI_2, PI, TAU};
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector2, Vector3};
 use rand::{Rng, RngExt};
 
-use super::furniture::Design;
+use super::furniture::{Design, Placing};
 use super::preset::Furnishing;
 use super::room::{FloorRegion, Room};
 use crate::error::{CatmapError, Result};
@@ -103,14 +105,13 @@ pub fn place_furniture<R: Rng + ?Sized>(furnishing: &Furnishing, room: &Room, rn
 /// The layout being built: placed poses by position in the furnishing, and their footprints.
 struct Draft<'a> {
     shapes: &'a BTreeMap<Design, Vec<Aabb>>,
-    floor: FloorRegion,
     poses: Vec<Option<(f32, f32, f32)>>,
     footprints: Vec<Footprint>,
 }
 
 impl Draft<'_> {
-    /// Adds `design` at `(x, y, yaw)` if it stays inside the walls and hits nothing placed.
-    fn try_place(&mut self, slot: usize, design: Design, (x, y, yaw): (f32, f32, f32)) -> bool {
+    /// Adds `design` at `(x, y, yaw)` if it stays inside `within` and hits nothing placed.
+    fn try_place(&mut self, slot: usize, design: Design, (x, y, yaw): (f32, f32, f32), within: &FloorRegion) -> bool {
         let new: Vec<Footprint> = self.shapes[&design]
             .iter()
             .map(|b| Footprint::new(b, x, y, yaw))
@@ -118,7 +119,7 @@ impl Draft<'_> {
         let inside = new
             .iter()
             .flat_map(Footprint::corners)
-            .all(|c| self.floor.contains(c.x, c.y, 0.05));
+            .all(|c| within.contains(c.x, c.y, 0.05));
         if !inside || new.iter().any(|f| self.footprints.iter().any(|g| f.collides(g))) {
             return false;
         }
@@ -138,7 +139,6 @@ fn try_layout<R: Rng + ?Sized>(
     let region = room.furniture_region();
     let mut draft = Draft {
         shapes,
-        floor: room.floor(),
         poses: vec![None; designs.len()],
         footprints: Vec::new(),
     };
@@ -147,9 +147,22 @@ fn try_layout<R: Rng + ?Sized>(
         let y = rng.random_range(region.min[1]..=region.max[1]);
         (x, y, rng.random_range(0.0..TAU))
     };
+    let floor = room.floor();
+    // Wall pieces stay out of the camera's strip along the −y wall.
+    let beside_walls = FloorRegion {
+        min: [floor.min[0], region.min[1]],
+        max: floor.max,
+    };
+    for (i, &design) in designs.iter().enumerate() {
+        if design.placing() == Placing::AgainstWall {
+            let back = shapes[&design].iter().map(|b| b.min.y).fold(f32::INFINITY, f32::min);
+            (0..TRIES_PER_OBJECT)
+                .find(|_| draft.try_place(i, design, wall_pose(&beside_walls, back, rng), &beside_walls))?;
+        }
+    }
     let table = designs.iter().position(|&d| d == Design::DiningTable);
     if let Some(t) = table {
-        (0..TRIES_PER_OBJECT).find(|_| draft.try_place(t, Design::DiningTable, random_pose(rng)))?;
+        (0..TRIES_PER_OBJECT).find(|_| draft.try_place(t, Design::DiningTable, random_pose(rng), &floor))?;
         let table_pose = draft.poses[t]?;
         let mut chairs: Vec<usize> = (0..designs.len()).filter(|&i| designs[i].is_chair()).collect();
         shuffle(&mut chairs, rng);
@@ -163,7 +176,7 @@ fn try_layout<R: Rng + ?Sized>(
             // A chair that fits no free slot (an armchair is wider than the gap between the table's
             // legs) goes elsewhere below, and the next chair tries.
             let fitting = slots.iter().position(|slot| {
-                (0..40).any(|_| draft.try_place(chair, designs[chair], tucked_pose(table_pose, slot, rng)))
+                (0..40).any(|_| draft.try_place(chair, designs[chair], tucked_pose(table_pose, slot, rng), &floor))
             });
             if let Some(k) = fitting {
                 slots.remove(k);
@@ -173,7 +186,7 @@ fn try_layout<R: Rng + ?Sized>(
     }
     for (i, &design) in designs.iter().enumerate() {
         if draft.poses[i].is_none() {
-            (0..TRIES_PER_OBJECT).find(|_| draft.try_place(i, design, random_pose(rng)))?;
+            (0..TRIES_PER_OBJECT).find(|_| draft.try_place(i, design, random_pose(rng), &floor))?;
         }
     }
     let placements = designs.iter().zip(&draft.poses).map(|(&design, pose)| {
@@ -185,6 +198,21 @@ fn try_layout<R: Rng + ?Sized>(
         })
     });
     placements.collect()
+}
+
+/// A pose against one of the walls bounding `region` on the +x, −x and +y sides (the camera walks
+/// along −y), picked at random, anywhere along it: the design's back, at `back` (< 0) on its y
+/// axis, 6–10 cm from the wall, its front (+y) facing into the room.
+fn wall_pose<R: Rng + ?Sized>(region: &FloorRegion, back: f32, rng: &mut R) -> (f32, f32, f32) {
+    let inset = rng.random_range(0.06..=0.10) - back;
+    let along_x = rng.random_range(region.min[0]..=region.max[0]);
+    let along_y = rng.random_range(region.min[1]..=region.max[1]);
+    // The front faces the wall's inward normal n: yaw = atan2(−n.x, n.y).
+    match rng.random_range(0..3) {
+        0 => (region.max[0] - inset, along_y, FRAC_PI_2),
+        1 => (region.min[0] + inset, along_y, 3.0 * FRAC_PI_2),
+        _ => (along_x, region.max[1] - inset, PI),
+    }
 }
 
 /// A chair slot at the table's edge: a point on the edge and the outward edge normal (table frame).
@@ -296,7 +324,55 @@ mod tests {
     }
 
     #[test]
-    fn both_presets_lay_out_for_many_seeds() {
+    fn wall_pieces_stand_with_their_backs_to_a_wall_the_camera_faces() {
+        let preset = super::super::preset::Preset::Living;
+        let room = preset.room();
+        let mut walls_used = [0; 3];
+        for seed in 0..10 {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let furnishing = preset.furnishing([rng.random(), rng.random()]);
+            let placed = place_furniture(&furnishing, &room, &mut rng).expect("the living room has space");
+            for p in placed.iter().filter(|p| p.design.placing() == Placing::AgainstWall) {
+                let b = p.design.mesh().bounds().expect("design has vertices");
+                let back = p.world_from_object * Point3::new(0.0, b.min.y, 0.0);
+                let front = p.world_from_object * nalgebra::Vector3::y();
+                // Distances from the back's middle to the +x, −x and +y walls, and their normals.
+                let walls = [
+                    (room.half_x_m - back.x, Vector2::new(-1.0, 0.0)),
+                    (room.half_x_m + back.x, Vector2::new(1.0, 0.0)),
+                    (room.half_y_m - back.y, Vector2::new(0.0, -1.0)),
+                ];
+                let (k, (gap, normal)) = walls
+                    .iter()
+                    .enumerate()
+                    .min_by(|a, b| a.1.0.total_cmp(&b.1.0))
+                    .expect("three walls");
+                assert!(
+                    (0.059..=0.101).contains(gap),
+                    "{} seed {seed}: back {gap} m from the wall",
+                    p.design.name()
+                );
+                assert!(
+                    Vector2::new(front.x, front.y).dot(normal) > 0.999,
+                    "{} faces the room",
+                    p.design.name()
+                );
+                assert!(
+                    back.y > room.furniture_region().min[1],
+                    "{} is beyond the camera's strip",
+                    p.design.name()
+                );
+                walls_used[k] += 1;
+            }
+        }
+        assert!(
+            walls_used.iter().all(|&n| n > 0),
+            "every wall the camera faces is used: {walls_used:?}"
+        );
+    }
+
+    #[test]
+    fn every_preset_lays_out_for_many_seeds() {
         for preset in super::super::preset::Preset::ALL {
             for seed in 0..40 {
                 let mut rng = ChaCha8Rng::seed_from_u64(seed);

@@ -16,9 +16,13 @@ pub enum Preset {
     /// 160×120, 30 frames, 6 objects (three identical ladder-back chairs, the table, a stool and a
     /// lamp): fast enough for unit and pipeline tests.
     Small,
-    /// 640×480, 240 frames, 12–14 objects: three or four of each chair design, the table, a
-    /// cabinet, a box, a lamp, a stool and a nightstand.
+    /// 640×480, 240 frames, 13–15 objects: three or four of each chair design, the table, a
+    /// cabinet, a box, a lamp, a stool, a nightstand and a sofa against a wall.
     Default,
+    /// 640×480, 240 frames, 11–12 objects of a living-bedroom: a bed, a sofa and a bookcase
+    /// against the walls, two nightstands, two or three armchairs, two ladder-back chairs, a
+    /// lamp and a box. Large unique objects seen from one side.
+    Living,
 }
 
 /// How many of each design a preset asks for, and how many chairs to tuck under the table.
@@ -32,13 +36,14 @@ pub struct Furnishing {
 
 impl Preset {
     /// Every preset.
-    pub const ALL: [Preset; 2] = [Self::Small, Self::Default];
+    pub const ALL: [Preset; 3] = [Self::Small, Self::Default, Self::Living];
 
     /// Lowercase name, as in `scene.json` and on the command line.
     pub fn name(self) -> &'static str {
         match self {
             Self::Small => "small",
             Self::Default => "default",
+            Self::Living => "living",
         }
     }
 
@@ -47,7 +52,7 @@ impl Preset {
     pub fn intrinsics(self) -> CameraIntrinsics {
         let (width, height) = match self {
             Self::Small => (160, 120),
-            Self::Default => (640, 480),
+            Self::Default | Self::Living => (640, 480),
         };
         let f = 0.8 * width as f32;
         CameraIntrinsics {
@@ -64,7 +69,7 @@ impl Preset {
     pub fn frame_count(self) -> usize {
         match self {
             Self::Small => 30,
-            Self::Default => 240,
+            Self::Default | Self::Living => 240,
         }
     }
 
@@ -76,7 +81,7 @@ impl Preset {
                 half_y_m: 2.25,
                 height_m: 2.6,
             },
-            Self::Default => Room {
+            Self::Default | Self::Living => Room {
                 half_x_m: 3.5,
                 half_y_m: 3.0,
                 height_m: 2.7,
@@ -110,10 +115,29 @@ impl Preset {
                     Design::FloorLamp,
                     Design::Stool,
                     Design::Nightstand,
+                    Design::Sofa,
                 ]);
                 Furnishing {
                     designs,
                     tucked_chairs: pick((draws[0] + draws[1]) / 2.0, &[2, 3]),
+                }
+            }
+            Self::Living => {
+                let mut designs = vec![Design::Armchair; pick(draws[0], &[2, 3])];
+                designs.extend([
+                    Design::LadderBackChair,
+                    Design::LadderBackChair,
+                    Design::Nightstand,
+                    Design::Nightstand,
+                    Design::Bed,
+                    Design::Sofa,
+                    Design::Bookcase,
+                    Design::FloorLamp,
+                    Design::StorageBox,
+                ]);
+                Furnishing {
+                    designs,
+                    tucked_chairs: 0,
                 }
             }
         }
@@ -133,7 +157,7 @@ impl FromStr for Preset {
         Self::ALL
             .into_iter()
             .find(|p| p.name() == s)
-            .ok_or_else(|| CatmapError::Config(format!("unknown synthetic preset {s:?} (small, default)")))
+            .ok_or_else(|| CatmapError::Config(format!("unknown synthetic preset {s:?} (small, default, living)")))
     }
 }
 
@@ -142,12 +166,25 @@ mod tests {
     use super::*;
 
     #[test]
-    fn default_preset_has_three_or_more_of_each_chair_and_twelve_to_sixteen_objects() {
+    fn default_preset_has_three_or_more_of_each_chair_a_sofa_and_twelve_to_sixteen_objects() {
         for draws in [[0.0, 0.0], [0.99, 0.99], [0.2, 0.7]] {
             let f = Preset::Default.furnishing(draws);
             let count = |d: Design| f.designs.iter().filter(|&&x| x == d).count();
             assert!(count(Design::LadderBackChair) >= 3 && count(Design::Armchair) >= 3);
+            assert_eq!(count(Design::Sofa), 1, "one large unique object against a wall");
             assert!((12..=16).contains(&f.designs.len()), "{} objects", f.designs.len());
+        }
+    }
+
+    #[test]
+    fn living_preset_has_the_three_wall_pieces_once_and_pairs_of_the_rest() {
+        for draws in [[0.0, 0.0], [0.99, 0.99]] {
+            let f = Preset::Living.furnishing(draws);
+            let count = |d: Design| f.designs.iter().filter(|&&x| x == d).count();
+            for large in [Design::Bed, Design::Sofa, Design::Bookcase] {
+                assert_eq!(count(large), 1, "{}", large.name());
+            }
+            assert!(count(Design::Nightstand) == 2 && count(Design::Armchair) >= 2);
         }
     }
 

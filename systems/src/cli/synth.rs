@@ -27,9 +27,12 @@ pub enum PresetArg {
     /// 160×120, 30 frames, 6 objects (three identical chairs, a table, a stool, a lamp): tests
     /// and the quick look.
     Small,
-    /// 640×480, 240 frames, 12–14 objects (three or four of each of two chair designs, six
-    /// unique objects).
+    /// 640×480, 240 frames, 13–15 objects (three or four of each of two chair designs, seven
+    /// unique objects, a sofa against a wall among them).
     Default,
+    /// 640×480, 240 frames, 11–12 objects of a living-bedroom (a bed, a sofa and a bookcase
+    /// against the walls; pairs of nightstands and chairs).
+    Living,
 }
 
 impl From<PresetArg> for Preset {
@@ -37,6 +40,7 @@ impl From<PresetArg> for Preset {
         match p {
             PresetArg::Small => Preset::Small,
             PresetArg::Default => Preset::Default,
+            PresetArg::Living => Preset::Living,
         }
     }
 }

@@ -8,13 +8,28 @@ use catmap::synth::{Design, RegistrationTrial, RegistrationTrialSpec};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+/// The designs of the category-registration issue's acceptance. The sofa, the bed and the
+/// bookcase (issue 33's scenes) stand alone in their class in every preset, so no member is
+/// registered to them; the bed, a large box seen from one side, fails 4 of 5 such trials
+/// (session 25).
+const TRIAL_DESIGNS: [Design; 8] = [
+    Design::LadderBackChair,
+    Design::Armchair,
+    Design::DiningTable,
+    Design::Cabinet,
+    Design::StorageBox,
+    Design::FloorLamp,
+    Design::Stool,
+    Design::Nightstand,
+];
+
 #[test]
 fn fifty_seeded_trials_register_within_five_degrees_and_three_centimetres() {
     let spec = RegistrationTrialSpec::default();
     let cfg = RegistrationConfig::default();
     let mut failures = Vec::new();
     for seed in 0..50u64 {
-        let design = Design::ALL[seed as usize % Design::ALL.len()];
+        let design = TRIAL_DESIGNS[seed as usize % TRIAL_DESIGNS.len()];
         let trial = RegistrationTrial::draw(design, &spec, seed).expect("trial");
         let fit = register_to_representative(
             &trial.source,

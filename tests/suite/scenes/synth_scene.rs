@@ -138,7 +138,7 @@ fn every_object_is_visible_in_some_frame() {
 
 #[test]
 fn objects_are_only_partly_observed() {
-    for (preset, seed) in [(Preset::Small, 6), (Preset::Default, 6)] {
+    for (preset, seed) in [(Preset::Small, 6), (Preset::Default, 6), (Preset::Living, 6)] {
         let scene = SyntheticScene::generate(seed, preset).expect("scene");
         let fractions = scene.observed_surface_fraction();
         assert_eq!(fractions.len(), scene.objects().len());
