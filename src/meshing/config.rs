@@ -40,12 +40,14 @@ impl MeshConfig {
         }
     }
 
-    /// The settings of the background mesh (its grid spans the background cloud's bounds).
+    /// The settings of the background mesh (its grid spans the background cloud's bounds; a
+    /// piece of wall apart from the rest is no fragment).
     pub fn background(&self) -> ObjectMeshConfig {
         ObjectMeshConfig {
             voxel_size_m: self.background_voxel_m,
             box_fill: 1.0,
             coarse_block: 1,
+            min_fragment_share: 0.0,
             ..self.object.clone()
         }
     }

@@ -34,6 +34,9 @@ pub struct ObjectMeshConfig {
     pub coarse_block: usize,
     /// A block is refined when its coarse samples come within this of the occupancy level.
     pub coarse_margin: f32,
+    /// Connected pieces of the mesh with less than this share of its area are dropped
+    /// (floating fragments, [`TriangleMesh::without_fragments`]); 0 keeps every piece.
+    pub min_fragment_share: f32,
 }
 
 impl Default for ObjectMeshConfig {
@@ -45,6 +48,7 @@ impl Default for ObjectMeshConfig {
             occupancy_level: 0.5,
             coarse_block: 4,
             coarse_margin: 0.45,
+            min_fragment_share: 0.01,
         }
     }
 }
@@ -126,6 +130,12 @@ impl ObjectGrid {
                 config.max_samples_per_side
             )));
         }
+        if !(0.0..1.0).contains(&config.min_fragment_share) {
+            return Err(CatmapError::Config(format!(
+                "min_fragment_share = {} must be in [0, 1)",
+                config.min_fragment_share
+            )));
+        }
         if !(config.box_fill > 0.0 && config.box_fill <= 1.0) {
             return Err(CatmapError::Config(format!(
                 "box_fill = {} must be in (0, 1]",
@@ -197,7 +207,7 @@ pub fn extract_object_mesh(
             |layer| extractor.push_layer(layer),
         )?;
     }
-    let mut mesh = extractor.finish()?;
+    let mut mesh = extractor.finish()?.without_fragments(config.min_fragment_share);
     mesh.transform_similarity(&object_grid.world_from_grid);
     Ok(mesh)
 }

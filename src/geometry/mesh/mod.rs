@@ -1,5 +1,6 @@
 //! Indexed triangle meshes: rigid and similarity transforms, merging, area, area-uniform surface
-//! sampling, bounds, vertex clustering (a lighter copy for display), and PLY input/output.
+//! sampling, bounds, vertex clustering (a lighter copy for display), connected pieces (dropping
+//! floating fragments), and PLY input/output.
 //!
 //! Ground-truth object meshes, the synthetic furniture and reconstructed surfaces all use this type.
 //! Sampling draws a triangle with probability proportional to its area, then a uniform point in it
@@ -209,6 +210,7 @@ impl TriangleMesh {
 
 /// One PLY element record as the parser fills it: position, colour and face indices.
 mod clustering;
+mod fragments;
 mod ply;
 
 #[cfg(test)]
