@@ -6,6 +6,18 @@
 //! the reverse distance (representative → aligned member, normalised by the representative's
 //! scale) decides: above `reverse_split_above` it leaves. Members that leave form a new group
 //! with its own representative, which may split again.
+//!
+//! That greedy pass (the paper's) keeps a member with the first representative that accepts it,
+//! and a poorly observed representative (a chair seen at 20 %, under a table) accepts few: its
+//! own design's chairs leave it and form a second group of that design. With
+//! [`SubcategoryAssignment::Best`] a second pass follows: the representatives of the groups the
+//! greedy pass left with two or more members are the candidates, and every other object — the
+//! members, and the representatives left alone — joins the candidate that explains it best, by
+//! the two-way distance (one-way + reverse, both normalised by scale) among the candidates whose
+//! rule accepts it. A member is too partial to decide when its two best candidates' two-way
+//! distances lie within `undecided_margin` of each other (a chair seen only by its seat fits
+//! both designs): it keeps a subcategory of its own rather than join a wrong design. A member no
+//! candidate accepts is its own subcategory too.
 
 use std::collections::BTreeMap;
 
@@ -17,7 +29,8 @@ use crate::categories::uncertainty::{RepresentativeChoice, choose_representative
 use crate::error::Result;
 use crate::ids::ObjectId;
 
-/// Thresholds of the subcategory rule (the reference code's values).
+/// Thresholds of the subcategory rule (the reference code's values) and how members are
+/// assigned.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SubcategoryRule {
@@ -29,6 +42,13 @@ pub struct SubcategoryRule {
     pub new_above: f32,
     /// In between, the member leaves when the reverse distance is above this.
     pub reverse_split_above: f32,
+    /// Which representative a member joins (see the module doc); unset: the schedule's
+    /// (`fast`: best, `paper`: first; [`crate::MapperConfig::category_registration`]), and
+    /// best where no schedule resolves it.
+    pub assignment: Option<SubcategoryAssignment>,
+    /// Under [`SubcategoryAssignment::Best`], a member whose two best candidates' two-way
+    /// distances differ by less than this share of the better one keeps its own subcategory.
+    pub undecided_margin: f32,
 }
 
 impl Default for SubcategoryRule {
@@ -38,8 +58,27 @@ impl Default for SubcategoryRule {
             same_below: 0.06,
             new_above: 0.15,
             reverse_split_above: 0.12,
+            assignment: None,
+            undecided_margin: 0.1,
         }
     }
+}
+
+impl SubcategoryRule {
+    /// The assignment that applies: the set one, else [`SubcategoryAssignment::Best`].
+    pub fn assignment(&self) -> SubcategoryAssignment {
+        self.assignment.unwrap_or(SubcategoryAssignment::Best)
+    }
+}
+
+/// Which representative a member joins.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SubcategoryAssignment {
+    /// The paper's: the first representative whose rule accepts it (greedy).
+    First,
+    /// The candidate representative that explains it best, two-way (see the module doc).
+    Best,
 }
 
 /// A member registered to its representative.
@@ -121,7 +160,126 @@ pub fn subcategorize(
         }
         groups.push(group);
     }
-    groups
+    match rule.assignment() {
+        SubcategoryAssignment::Best if rule.enabled => assign_best(groups, rule, registration),
+        _ => groups,
+    }
+}
+
+/// The second pass of [`SubcategoryAssignment::Best`] over the greedy pass's `groups` (see the
+/// module doc): groups in the greedy order, the candidates' first, then one per member that
+/// joined none, in id order.
+fn assign_best(
+    groups: Vec<Subcategory>,
+    rule: &SubcategoryRule,
+    registration: &(impl PairRegistration + Sync),
+) -> Vec<Subcategory> {
+    use rayon::prelude::*;
+    let candidates: Vec<ObjectId> = groups
+        .iter()
+        .filter(|g| g.members.len() > 1)
+        .map(|g| g.representative)
+        .collect();
+    if candidates.is_empty() {
+        return groups;
+    }
+    let others: Vec<ObjectId> = groups
+        .iter()
+        .flat_map(|g| g.members.keys().copied())
+        .filter(|id| !candidates.contains(id))
+        .collect();
+    let explained: Vec<(ObjectId, Vec<Explanation>)> = others
+        .par_iter()
+        .map(|&id| {
+            let fits = candidates
+                .iter()
+                .filter_map(|&rep| explain(id, rep, rule, registration))
+                .collect();
+            (id, fits)
+        })
+        .collect();
+    let mut out: Vec<Subcategory> = groups
+        .into_iter()
+        .filter(|g| candidates.contains(&g.representative))
+        .map(|g| Subcategory {
+            members: BTreeMap::from([(g.representative, g.members[&g.representative])]),
+            ..g
+        })
+        .collect();
+    let mut alone = Vec::new();
+    for (id, fits) in explained {
+        match best_explanation(&fits, rule.undecided_margin) {
+            Some(best) => {
+                let group = out
+                    .iter_mut()
+                    .find(|g| g.representative == best.representative)
+                    .expect("a candidate heads a group");
+                group.members.insert(id, best.alignment);
+            }
+            None => alone.push(id),
+        }
+    }
+    alone.sort_unstable();
+    out.extend(alone.into_iter().map(|id| Subcategory {
+        representative: id,
+        members: BTreeMap::from([(
+            id,
+            Alignment {
+                template_from_object: Isometry3::identity(),
+                chamfer: 0.0,
+                reverse_chamfer: None,
+            },
+        )]),
+    }));
+    out
+}
+
+/// A candidate representative that accepts a member, and how well it explains it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Explanation {
+    /// The candidate.
+    pub representative: ObjectId,
+    /// The member's alignment to it, with both distances.
+    pub alignment: Alignment,
+}
+
+impl Explanation {
+    /// One-way plus reverse distance.
+    pub fn two_way(&self) -> f32 {
+        self.alignment.chamfer + self.alignment.reverse_chamfer.unwrap_or(0.0)
+    }
+}
+
+/// How `representative` explains `id`, when the rule accepts it: the alignment with the reverse
+/// distance always measured.
+fn explain(
+    id: ObjectId,
+    representative: ObjectId,
+    rule: &SubcategoryRule,
+    registration: &impl PairRegistration,
+) -> Option<Explanation> {
+    let mut alignment = decide(id, representative, rule, registration)?;
+    if alignment.reverse_chamfer.is_none() {
+        alignment.reverse_chamfer =
+            Some(registration.reverse_chamfer(id, representative, &alignment.template_from_object));
+    }
+    Some(Explanation {
+        representative,
+        alignment,
+    })
+}
+
+/// The explanation a member takes among those of the candidates that accept it: the smallest
+/// two-way distance, unless the second smallest lies within `undecided_margin` of it (too
+/// partial to decide: `None`, as when no candidate accepts it).
+pub fn best_explanation(fits: &[Explanation], undecided_margin: f32) -> Option<Explanation> {
+    let mut sorted: Vec<&Explanation> = fits.iter().collect();
+    sorted.sort_by(|a, b| a.two_way().total_cmp(&b.two_way()));
+    match sorted.as_slice() {
+        [] => None,
+        [only] => Some(**only),
+        [best, second, ..] => (second.two_way() > best.two_way() * (1.0 + undecided_margin)).then_some(**best),
+    }
 }
 
 /// `Some(alignment)` when `id` stays with `representative`.
@@ -210,14 +368,11 @@ mod tests {
         let ids = [ObjectId(1), ObjectId(2), ObjectId(3)];
         let rays = BTreeMap::from([(ObjectId(1), 10)]);
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let groups = subcategorize(
-            &ids,
-            &rays,
-            RepresentativeChoice::Uncertainty,
-            &SubcategoryRule::default(),
-            &reg,
-            &mut rng,
-        );
+        let paper = SubcategoryRule {
+            assignment: Some(SubcategoryAssignment::First),
+            ..SubcategoryRule::default()
+        };
+        let groups = subcategorize(&ids, &rays, RepresentativeChoice::Uncertainty, &paper, &reg, &mut rng);
         assert_eq!(groups[0].members.keys().map(|i| i.0).collect::<Vec<_>>(), [1, 3]);
         assert_eq!(groups[0].members[&ObjectId(3)].reverse_chamfer, None);
         assert_eq!(groups.len(), 2, "object 2 leaves");
@@ -228,5 +383,158 @@ mod tests {
         };
         let groups = subcategorize(&ids, &rays, RepresentativeChoice::Uncertainty, &off, &reg, &mut rng);
         assert_eq!(groups.len(), 1, "no subcategories: one group per class");
+    }
+
+    /// Pair distances from a table: `(source, template) → (one-way, reverse)`; pairs not listed
+    /// are far apart (0.5 both ways).
+    struct Table(BTreeMap<(u32, u32), (f32, f32)>);
+
+    impl Table {
+        fn of(pairs: &[((u32, u32), (f32, f32))]) -> Self {
+            Self(pairs.iter().copied().collect())
+        }
+        fn get(&self, source: ObjectId, template: ObjectId) -> (f32, f32) {
+            self.0.get(&(source.0, template.0)).copied().unwrap_or((0.5, 0.5))
+        }
+    }
+
+    impl PairRegistration for Table {
+        fn register(&self, source: ObjectId, template: ObjectId) -> Result<(Isometry3<f32>, f32)> {
+            Ok((
+                Isometry3::translation(template.0 as f32, 0.0, 0.0),
+                self.get(source, template).0,
+            ))
+        }
+        fn reverse_chamfer(&self, source: ObjectId, template: ObjectId, _: &Isometry3<f32>) -> f32 {
+            self.get(source, template).1
+        }
+    }
+
+    fn members_of(groups: &[Subcategory]) -> Vec<(u32, Vec<u32>)> {
+        groups
+            .iter()
+            .map(|g| (g.representative.0, g.members.keys().map(|i| i.0).collect()))
+            .collect()
+    }
+
+    /// Design A: 1–4, design B: 5–6. Object 2 is seen at a fifth and ranks first; its design's
+    /// chairs are far from it one way (their full shape against its part), so the greedy pass
+    /// leaves it alone and makes a second group of design A.
+    fn partial_representative(partial_to_b: (f32, f32)) -> Table {
+        let mut pairs = vec![((2, 1), (0.03, 0.10)), ((2, 5), partial_to_b), ((6, 5), (0.02, 0.02))];
+        for m in [3, 4] {
+            pairs.push(((m, 1), (0.02, 0.02)));
+            pairs.push(((m, 2), (0.2, 0.02)));
+        }
+        pairs.push(((1, 2), (0.2, 0.02)));
+        Table::of(&pairs)
+    }
+
+    fn subcategorize_ranked(reg: &Table, rule: &SubcategoryRule) -> Vec<Subcategory> {
+        let ids: Vec<ObjectId> = (1..=6).map(ObjectId).collect();
+        let rays = BTreeMap::from([(ObjectId(2), 900), (ObjectId(5), 800), (ObjectId(1), 700)]);
+        subcategorize(
+            &ids,
+            &rays,
+            RepresentativeChoice::Uncertainty,
+            rule,
+            reg,
+            &mut ChaCha8Rng::seed_from_u64(0),
+        )
+    }
+
+    #[test]
+    fn a_partial_representative_joins_the_group_of_its_design_that_explains_it_best() {
+        let reg = partial_representative((0.05, 0.2));
+        let first = SubcategoryRule {
+            assignment: Some(SubcategoryAssignment::First),
+            ..SubcategoryRule::default()
+        };
+        assert_eq!(
+            members_of(&subcategorize_ranked(&reg, &first)),
+            [(2, vec![2]), (5, vec![5, 6]), (1, vec![1, 3, 4])],
+            "the paper's greedy pass splits design A in two"
+        );
+        let groups = subcategorize_ranked(&reg, &SubcategoryRule::default());
+        assert_eq!(members_of(&groups), [(5, vec![5, 6]), (1, vec![1, 2, 3, 4])]);
+        let joined = groups[1].members[&ObjectId(2)];
+        assert_eq!(joined.chamfer, 0.03);
+        assert_eq!(joined.reverse_chamfer, Some(0.10), "the reverse distance is measured");
+        assert_eq!(
+            joined.template_from_object,
+            Isometry3::translation(1.0, 0.0, 0.0),
+            "aligned to 1"
+        );
+    }
+
+    #[test]
+    fn a_member_both_designs_explain_alike_keeps_its_own_subcategory() {
+        // Two-way 0.13 to design A's representative, 0.135 to B's: within 10 %.
+        let reg = partial_representative((0.05, 0.085));
+        let groups = subcategorize_ranked(&reg, &SubcategoryRule::default());
+        assert_eq!(members_of(&groups), [(5, vec![5, 6]), (1, vec![1, 3, 4]), (2, vec![2])]);
+        let decided = SubcategoryRule {
+            undecided_margin: 0.0,
+            ..SubcategoryRule::default()
+        };
+        assert_eq!(
+            members_of(&subcategorize_ranked(&reg, &decided)),
+            [(5, vec![5, 6]), (1, vec![1, 2, 3, 4])],
+            "without a margin the nearer design takes it"
+        );
+    }
+
+    #[test]
+    fn a_member_the_first_representative_accepts_joins_the_one_that_explains_it_better() {
+        // Representatives 1 (ranked first) and 4; member 2 is within `same_below` of 1 but
+        // nearer to 4 both ways; 3 belongs to 1, 5 to 4.
+        let reg = Table::of(&[
+            ((2, 1), (0.05, 0.10)),
+            ((2, 4), (0.02, 0.03)),
+            ((3, 1), (0.01, 0.01)),
+            ((5, 4), (0.01, 0.01)),
+        ]);
+        let ids: Vec<ObjectId> = (1..=5).map(ObjectId).collect();
+        let rays = BTreeMap::from([(ObjectId(1), 900), (ObjectId(4), 800)]);
+        let run = |assignment| {
+            let rule = SubcategoryRule {
+                assignment: Some(assignment),
+                ..SubcategoryRule::default()
+            };
+            members_of(&subcategorize(
+                &ids,
+                &rays,
+                RepresentativeChoice::Uncertainty,
+                &rule,
+                &reg,
+                &mut ChaCha8Rng::seed_from_u64(0),
+            ))
+        };
+        assert_eq!(run(SubcategoryAssignment::First), [(1, vec![1, 2, 3]), (4, vec![4, 5])]);
+        assert_eq!(run(SubcategoryAssignment::Best), [(1, vec![1, 3]), (4, vec![2, 4, 5])]);
+    }
+
+    #[test]
+    fn the_best_explanation_is_the_smallest_two_way_distance_outside_the_margin() {
+        let fit = |rep: u32, one: f32, reverse: f32| Explanation {
+            representative: ObjectId(rep),
+            alignment: Alignment {
+                template_from_object: Isometry3::identity(),
+                chamfer: one,
+                reverse_chamfer: Some(reverse),
+            },
+        };
+        assert_eq!(best_explanation(&[], 0.1), None);
+        assert_eq!(
+            best_explanation(&[fit(1, 0.1, 0.1)], 0.1).map(|e| e.representative),
+            Some(ObjectId(1))
+        );
+        let pick = best_explanation(&[fit(1, 0.04, 0.1), fit(2, 0.05, 0.05)], 0.1);
+        assert_eq!(pick.map(|e| e.representative), Some(ObjectId(2)), "0.10 against 0.14");
+        assert_eq!(
+            best_explanation(&[fit(1, 0.05, 0.06), fit(2, 0.05, 0.05)], 0.1),
+            None,
+            "0.11 against 0.10"
+        );
     }
 }

@@ -1,5 +1,7 @@
 //! [`AfterStream`]: the training phases once the stream has ended, resolved from the config.
 
+use crate::categories::class_registration::CategoryConfig;
+use crate::categories::subcategories::SubcategoryAssignment;
 use crate::field::RaySamplerConfig;
 use crate::training::SchedulePolicy;
 
@@ -59,6 +61,20 @@ impl MapperConfig {
             .object_rays
             .with_default_carving(carving)
             .with_default_priors(priors, priors)
+    }
+
+    /// The class registration the run uses: `categories`, its unset subcategory assignment set
+    /// by the schedule — the best explanation under `fast`, the paper's first acceptance under
+    /// `paper`.
+    pub fn category_registration(&self) -> CategoryConfig {
+        let mut cfg = self.categories.clone();
+        cfg.subcategories
+            .assignment
+            .get_or_insert(match self.training_policy() {
+                SchedulePolicy::Fast => SubcategoryAssignment::Best,
+                SchedulePolicy::Paper => SubcategoryAssignment::First,
+            });
+        cfg
     }
 
     /// The phases after the stream: the paper's fixed protocol (`fields.final_steps` or
@@ -168,6 +184,21 @@ mod tests {
         assert_eq!((rays.solid_prior_rays(), rays.seen_free_rays()), (0, 2));
         let offline = config(SchedulePolicy::Fast, Protocol::Offline, Fields::Category).object_rays();
         assert_eq!(offline.solid_prior_rays(), 0, "offline runs the paper's protocol");
+    }
+
+    #[test]
+    fn the_schedule_sets_the_unset_subcategory_assignment_and_the_config_wins() {
+        let assignment = |c: &MapperConfig| c.category_registration().subcategories.assignment;
+        let mut fast = config(SchedulePolicy::Fast, Protocol::Online, Fields::Category);
+        assert_eq!(assignment(&fast), Some(SubcategoryAssignment::Best));
+        let paper = config(SchedulePolicy::Paper, Protocol::Online, Fields::Category);
+        assert_eq!(
+            assignment(&paper),
+            Some(SubcategoryAssignment::First),
+            "the paper's greedy rule"
+        );
+        fast.categories.subcategories.assignment = Some(SubcategoryAssignment::First);
+        assert_eq!(assignment(&fast), Some(SubcategoryAssignment::First));
     }
 
     #[test]

@@ -42,12 +42,13 @@ pub fn register_categories(
         config.field_steps_before_registration(),
         config.categories.reregister_growth,
     );
+    let registration = config.category_registration();
     for (entity, category, previous) in &mut categories {
         let class = category.class;
         let Some((members, last)) = due_class(category, previous.as_deref(), &index, &objects, steps, growth) else {
             continue;
         };
-        match update_class(class, &members, &last, &fields.objects, &config.categories, config.seed) {
+        match update_class(class, &members, &last, &fields.objects, &registration, config.seed) {
             Ok(update) => {
                 times.add("uncertainty", update.uncertainty_time);
                 times.add("register", update.register_time);
