@@ -43,6 +43,9 @@ pub(super) struct ClassClouds<'a> {
     pub growth: f32,
     /// Every pair answered so far.
     answered: Mutex<PairCache>,
+    /// Reverse distances measured in this registration, by pair (each pair has one alignment
+    /// here, the one [`PairRegistration::register`] answered).
+    reverse: Mutex<BTreeMap<(ObjectId, ObjectId), f32>>,
 }
 
 impl<'a> ClassClouds<'a> {
@@ -67,6 +70,7 @@ impl<'a> ClassClouds<'a> {
             warm_tolerance: cfg.warm_start_tolerance,
             growth: cfg.reregister_growth,
             answered: Mutex::new(PairCache::default()),
+            reverse: Mutex::new(BTreeMap::new()),
         }
     }
 
@@ -113,6 +117,15 @@ impl<'a> ClassClouds<'a> {
 
     /// The full multi-start search (one random stream per ordered pair, so results do not depend
     /// on the order pairs are tried).
+    /// The answer this registration already gave for the pair, if it did.
+    fn answered_now(&self, source: ObjectId, template: ObjectId) -> Option<(Isometry3<f32>, f32)> {
+        let answered = self.answered.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        answered
+            .0
+            .get(&(source, template))
+            .map(|c| (c.template_from_source, c.chamfer))
+    }
+
     fn search(&self, source: ObjectId, template: ObjectId) -> Result<crate::registration::Registration> {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_stream((u64::from(source.0) << 32) | u64::from(template.0));
@@ -132,6 +145,11 @@ impl<'a> ClassClouds<'a> {
 
 impl PairRegistration for ClassClouds<'_> {
     fn register(&self, source: ObjectId, template: ObjectId) -> Result<(Isometry3<f32>, f32)> {
+        if let Some(answer) = self.answered_now(source, template) {
+            // Asked again in this registration (the best-explanation pass asks the greedy
+            // pass's pairs again): the same clouds, the same answer.
+            return Ok(answer);
+        }
         let (s, t) = (self.cloud(source)?, self.cloud(template)?);
         let size = |id| self.sizes.get(&id).copied().unwrap_or(0);
         let now = PairPoints {
@@ -178,11 +196,17 @@ impl PairRegistration for ClassClouds<'_> {
     }
 
     fn reverse_chamfer(&self, source: ObjectId, template: ObjectId, template_from_source: &Isometry3<f32>) -> f32 {
+        let lock = || self.reverse.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        if let Some(&known) = lock().get(&(source, template)) {
+            return known;
+        }
         let (Ok(s), Ok(t)) = (self.cloud(source), self.cloud(template)) else {
             return f32::INFINITY;
         };
         let aligned: Vec<Point3<f32>> = s.iter().map(|p| template_from_source * p).collect();
-        normalised_one_way_chamfer(t, &aligned).unwrap_or(f32::INFINITY)
+        let distance = normalised_one_way_chamfer(t, &aligned).unwrap_or(f32::INFINITY);
+        lock().insert((source, template), distance);
+        distance
     }
 }
 
