@@ -158,6 +158,9 @@ impl MapperConfig {
         if m.object.max_samples_per_side < 2 || !(m.object.box_fill > 0.0 && m.object.box_fill <= 1.0) {
             return bad("meshes.object: max_samples_per_side must be >= 2 and box_fill in (0, 1]");
         }
+        if !(0.0..1.0).contains(&m.object.min_fragment_share) {
+            return bad("meshes.object.min_fragment_share must be in [0, 1)");
+        }
         if !(self.checkpoint.every_seconds >= 0.0 && self.checkpoint.every_seconds.is_finite()) {
             return bad("checkpoint.every_seconds must be a finite number of seconds, 0 or more (0: never)");
         }
@@ -266,6 +269,16 @@ mod tests {
         // Found by the config fuzzer: the channel reserved 240 GB and the process aborted.
         let err = MapperConfig::from_toml("[stream]\nchannel_capacity = 4294967295\n").expect_err("must fail");
         assert!(err.to_string().contains("between 1 and 1024"), "{err}");
+    }
+
+    #[test]
+    fn a_fragment_share_outside_zero_to_one_is_rejected() {
+        for share in ["1.0", "-0.1", "nan"] {
+            let toml = format!("[meshes.object]\nmin_fragment_share = {share}\n");
+            let err = MapperConfig::from_toml(&toml).expect_err("must fail");
+            assert!(err.to_string().contains("min_fragment_share"), "{share}: {err}");
+        }
+        assert!(MapperConfig::from_toml("[meshes.object]\nmin_fragment_share = 0.0\n").is_ok());
     }
 
     #[test]

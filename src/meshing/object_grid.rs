@@ -130,12 +130,6 @@ impl ObjectGrid {
                 config.max_samples_per_side
             )));
         }
-        if !(0.0..1.0).contains(&config.min_fragment_share) {
-            return Err(CatmapError::Config(format!(
-                "min_fragment_share = {} must be in [0, 1)",
-                config.min_fragment_share
-            )));
-        }
         if !(config.box_fill > 0.0 && config.box_fill <= 1.0) {
             return Err(CatmapError::Config(format!(
                 "box_fill = {} must be in (0, 1]",

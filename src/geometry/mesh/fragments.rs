@@ -40,10 +40,11 @@ impl TriangleMesh {
 
     /// The mesh without the connected pieces whose area is below `min_share` of the mesh's
     /// area (see the module doc), and without the vertices only they used; colours follow
-    /// their vertices. A `min_share` of 0 or less keeps every piece.
-    pub fn without_fragments(&self, min_share: f32) -> TriangleMesh {
+    /// their vertices. A `min_share` of 0 or less keeps every piece (the mesh is returned as it
+    /// is, without a copy).
+    pub fn without_fragments(self, min_share: f32) -> TriangleMesh {
         if min_share <= 0.0 || self.triangles.is_empty() {
-            return self.clone();
+            return self;
         }
         let (pieces, count) = self.pieces();
         let mut areas = vec![0.0f64; count];
@@ -53,7 +54,7 @@ impl TriangleMesh {
         let total: f64 = areas.iter().sum();
         let keep: Vec<bool> = areas.iter().map(|&a| a >= f64::from(min_share) * total).collect();
         if keep.iter().all(|&k| k) {
-            return self.clone();
+            return self;
         }
         let mut new_index = vec![u32::MAX; self.vertices.len()];
         let mut out = TriangleMesh {
@@ -131,14 +132,18 @@ mod tests {
     #[test]
     fn pieces_above_the_share_stay_and_a_share_of_zero_keeps_everything() {
         let mesh = cube_and_blob();
-        assert_eq!(mesh.without_fragments(0.002), mesh, "the blob is 0.25 % of the area");
-        assert_eq!(mesh.without_fragments(0.0), mesh);
+        assert_eq!(
+            mesh.clone().without_fragments(0.002),
+            mesh,
+            "the blob is 0.25 % of the area"
+        );
+        assert_eq!(mesh.clone().without_fragments(0.0), mesh);
         let two = TriangleMesh::merged([
             &block(0.0, 0.0, 0.0, [1.0, 1.0, 1.0]),
             &block(3.0, 0.0, 0.0, [0.6, 0.6, 0.6]),
         ]);
         assert_eq!(
-            two.without_fragments(0.05),
+            two.clone().without_fragments(0.05),
             two,
             "a piece of a quarter of the area stays"
         );
