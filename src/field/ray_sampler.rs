@@ -26,7 +26,7 @@ use super::free_space::{CarveCounts, carving_interval, ray_box_interval};
 use super::samples::RaySamples;
 use super::solid_prior::{PriorRays, append_prior_rays};
 use crate::geometry::oriented_box::OrientedBox;
-use crate::objects::hidden_space::{HiddenCells, HiddenSpaceCache};
+use crate::objects::hidden_space::{CellRules, FreeCells, HiddenCells, HiddenSpaceCache};
 use crate::objects::keyframes::KeyframeWindow;
 use crate::objects::object_view::{ObjectView, PixelState};
 
@@ -62,6 +62,8 @@ pub struct RaySamplerConfig {
     /// Prior rays per step around the centres of the cells of the object's box that a view saw
     /// free, each sample asked to be empty. `None`: the schedule's choice; 0: none.
     pub seen_free_rays: Option<usize>,
+    /// Which cells the seen-free prior draws from.
+    pub free_cells: FreeCells,
     /// Weight of the priors' loss (mean over their samples of −ln o, or −ln(1 − o) under the box).
     pub hidden_solid_weight: f32,
 }
@@ -87,6 +89,7 @@ impl RaySamplerConfig {
         hidden_cells: HiddenCells::Enclosed,
         below_support_rays: 0,
         seen_free_rays: None,
+        free_cells: FreeCells::SeenAndOpen,
         hidden_solid_weight: 1.0,
     };
 
@@ -103,6 +106,7 @@ impl RaySamplerConfig {
         hidden_cells: HiddenCells::Enclosed,
         below_support_rays: 0,
         seen_free_rays: None,
+        free_cells: FreeCells::SeenAndOpen,
         hidden_solid_weight: 1.0,
     };
 
@@ -193,8 +197,12 @@ pub fn sample_window_rays(
     if let Some((cache, fitted_box)) = hidden
         && counts.hidden_solid + counts.below_support + counts.seen_free > 0
     {
-        let space = cache.current(&views, fitted_box, cfg.hidden_cells);
-        append_prior_rays(&mut rays, space, counts, field_origin, rng);
+        let rules = CellRules {
+            hidden: cfg.hidden_cells,
+            free: cfg.free_cells,
+        };
+        let space = cache.current(&views, fitted_box, rules);
+        append_prior_rays(&mut rays, space, &views, counts, field_origin, rng);
     }
     rays
 }

@@ -10,7 +10,7 @@ use rand::Rng;
 
 use super::samples::RaySamples;
 use crate::objects::hidden_space::HiddenSpace;
-use crate::objects::object_view::PixelState;
+use crate::objects::object_view::{ObjectView, PixelState};
 
 /// How many prior rays a step draws, and the prior's weight.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -26,10 +26,12 @@ pub struct PriorRays {
 }
 
 /// Appends the prior rays of `counts`, `rays.samples_per_ray` samples each, drawn from `hidden`
-/// (relative to `field_origin`).
+/// (relative to `field_origin`); `views` (the keyframe crops the space was computed from) check
+/// the draws around seen-free cells ([`HiddenSpace::draw_free`]).
 pub fn append_prior_rays(
     rays: &mut RaySamples,
     hidden: &HiddenSpace,
+    views: &[&ObjectView],
     counts: PriorRays,
     field_origin: &Point3<f32>,
     rng: &mut impl Rng,
@@ -39,11 +41,7 @@ pub fn append_prior_rays(
     } else {
         counts.hidden_solid
     };
-    let free = if hidden.free_centres.is_empty() {
-        0
-    } else {
-        counts.seen_free
-    };
+    let free = if !hidden.has_free_cells() { 0 } else { counts.seen_free };
     if solid + counts.below_support + free == 0 {
         return;
     }
@@ -56,7 +54,7 @@ pub fn append_prior_rays(
         for k in 0..rays.samples_per_ray {
             let p = match state {
                 PixelState::HiddenSolid => hidden.draw(rng).unwrap_or(centre),
-                PixelState::SeenFree => hidden.draw_free(rng).unwrap_or(centre),
+                PixelState::SeenFree => hidden.draw_free(views, rng).unwrap_or(centre),
                 _ => hidden.draw_below_support(rng),
             };
             let p = p - field_origin.coords;
@@ -86,6 +84,7 @@ mod tests {
             cell_size: Vector3::new(0.01, 0.01, 0.01),
             centres: vec![Point3::new(0.005, 0.005, 0.005)],
             free_centres: vec![Point3::new(-0.035, 0.025, -0.005)],
+            open_centres: Vec::new(),
         };
         let mut rays = RaySamples {
             samples_per_ray: 4,
@@ -101,6 +100,7 @@ mod tests {
         append_prior_rays(
             &mut rays,
             &hidden,
+            &[],
             counts,
             &origin,
             &mut seeded_rng(1, RngStream::Mapper),
@@ -147,7 +147,14 @@ mod tests {
             samples_per_ray: 4,
             ..RaySamples::default()
         };
-        append_prior_rays(&mut few, &empty, counts, &origin, &mut seeded_rng(1, RngStream::Mapper));
+        append_prior_rays(
+            &mut few,
+            &empty,
+            &[],
+            counts,
+            &origin,
+            &mut seeded_rng(1, RngStream::Mapper),
+        );
         assert!(few.states.iter().all(|s| *s == PixelState::BelowSupport) && few.num_rays() == 2);
     }
 }

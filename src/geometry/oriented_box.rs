@@ -48,6 +48,27 @@ impl OrientedBox {
         })
     }
 
+    /// The smallest box standing upright (its z along world z) that encloses this one, turned
+    /// about world z as this box's x axis is (its y axis when x stands upright). A box fitted to
+    /// a partly seen object may lean; space "beside" or "under" the object is upright space.
+    pub fn upright(&self) -> OrientedBox {
+        let axes = self.world_from_box.rotation.to_rotation_matrix().into_inner();
+        let (x, y) = (axes.column(0), axes.column(1));
+        let along = if x.x.hypot(x.y) >= 1e-3 { x } else { y };
+        let yaw = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), along.y.atan2(along.x));
+        let frame = Isometry3::from_parts(self.world_from_box.translation, yaw);
+        let corners = self.corners().map(|c| frame.inverse_transform_point(&c).coords);
+        let (lo, hi) = corners.iter().fold(
+            (Vector3::repeat(f32::INFINITY), Vector3::repeat(f32::NEG_INFINITY)),
+            |(lo, hi), c| (lo.inf(c), hi.sup(c)),
+        );
+        let centre = frame * Point3::from((lo + hi) / 2.0);
+        OrientedBox {
+            world_from_box: Isometry3::from_parts(Translation3::from(centre.coords), yaw),
+            half_extents: (hi - lo) / 2.0,
+        }
+    }
+
     /// Whether `p` lies inside (within `margin_m`).
     pub fn contains(&self, p: &Point3<f32>, margin_m: f32) -> bool {
         let local = self.world_from_box.inverse_transform_point(p);

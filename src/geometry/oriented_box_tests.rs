@@ -107,3 +107,35 @@ fn support_points_are_the_last_maxima_along_each_direction_however_often_points_
     let want: Vec<Vector3<f64>> = naive.into_iter().map(|i| points[i]).collect();
     assert_eq!(support_points(&points, &directions), want);
 }
+
+#[test]
+fn the_upright_box_of_a_leaning_box_stands_on_world_z_and_encloses_it() {
+    let leaning = OrientedBox {
+        world_from_box: Isometry3::from_parts(
+            Translation3::new(1.0, 2.0, 0.5),
+            UnitQuaternion::from_euler_angles(0.3, 0.0, 0.7),
+        ),
+        half_extents: Vector3::new(1.0, 0.45, 0.3),
+    };
+    let upright = leaning.upright();
+    let z = upright.world_from_box.rotation * Vector3::z();
+    assert!((z - Vector3::z()).norm() < 1e-5, "box z {z} along world z");
+    for c in leaning.corners() {
+        assert!(upright.contains(&c, 1e-4), "corner {c} outside the upright box");
+    }
+    // Turned as the leaning box's x axis: its long side stays the upright box's x.
+    let x = upright.world_from_box.rotation * Vector3::x();
+    assert!((x.y.atan2(x.x) - 0.7).abs() < 1e-4, "yaw {}", x.y.atan2(x.x));
+    assert!(upright.half_extents.x > upright.half_extents.y);
+    // The leaning box's height grows by its tilt: 0.3 cos 0.3 + 0.45 sin 0.3.
+    let height = 0.3 * 0.3f32.cos() + 0.45 * 0.3f32.sin();
+    assert!(
+        (upright.half_extents.z - height).abs() < 1e-4,
+        "{}",
+        upright.half_extents.z
+    );
+    // An upright box is its own upright box.
+    let again = upright.upright();
+    assert!((again.half_extents - upright.half_extents).norm() < 1e-5);
+    assert!((again.center() - upright.center()).norm() < 1e-5);
+}

@@ -8,22 +8,23 @@
 //! under the top). The solid prior (`fields.object_rays.hidden_solid_rays`) asks the field to be
 //! solid in these cells, and nowhere a ray passed.
 //!
-//! The box is divided into [`CELLS_PER_AXIS`]³ cells. Each cell centre is projected into every
-//! keyframe crop of the object; at the pixel it lands on (measured depth d, the centre's camera
-//! depth z, `m` the cell's half diagonal) the view says:
-//! - z < d − m: a ray passed through the cell before its surface — **free**;
-//! - |z − d| ≤ m on the object's pixel: the cell is **at the object's surface**;
-//! - z > d + m on the object's pixel: **behind the object's surface**;
-//! - z > d + m on another object's (or the background's) pixel: **behind another surface** — the
-//!   floor under the object, a chair under a table's top: it may be empty.
+//! The box is divided into [`CELLS_PER_AXIS`]³ cells; what the keyframe crops say of each
+//! cell's centre is [`super::cell_evidence`]'s: seen free, occluded, at the object's surface,
+//! glimpsed, hidden or unknown.
 //!
-//! Over all views a cell is, in this order of precedence: seen free (free in one view), occluded
-//! (behind another surface in one), surface, hidden (behind the object's surface in one), or
-//! unknown. Cells that project outside a crop or onto invalid depth learn nothing from that view.
 //! The box is the one fitted to the observed cloud (not the larger region the object is meshed
-//! in): its faces are where the object was seen to end. Which hidden cells the prior takes is
-//! [`HiddenCells`]' choice; the support prior's samples lie under the box
-//! ([`HiddenSpace::draw_below_support`]).
+//! in): its faces are where the object was seen to end. It is stood upright first
+//! ([`OrientedBox::upright`]): a box fitted to a partly seen object may lean, and the walks
+//! below go sideways, along the floor; in a leaning box they climb from the gap under a sofa
+//! into its base. Which hidden cells the prior takes is [`HiddenCells`]' choice; the support
+//! prior's samples lie under the box ([`HiddenSpace::draw_below_support`]).
+//!
+//! Hidden cells that open sideways onto space a view saw through (seen free or glimpsed) under
+//! the object's observed surface are **open**: the space under a tabletop's apron, between
+//! legs, under a bed's frame. Under [`FreeCells::SeenAndOpen`] they join the seen-free prior's
+//! cells (a glimpsed cell does not: the view saw its centre free, not the span its draws
+//! cover): what continues space seen empty, behind nothing but the object's own top, is asked to
+//! be empty (the field left to itself extends the top into a slab).
 //!
 //! The cells seen free feed the seen-free prior (`fields.object_rays.seen_free_rays`): samples
 //! around their centres ([`HiddenSpace::draw_free`]) asked to be empty. The rays that saw them
@@ -35,7 +36,8 @@
 use nalgebra::{Isometry3, Point3, Vector3};
 use rand::{Rng, RngExt};
 
-use super::object_view::{ObjectView, PixelState};
+use super::cell_evidence::{CellEvidence, EvidenceGrid, GLIMPSE_MARGIN_M, ViewEvidence, cell_evidence, view_evidence};
+use super::object_view::ObjectView;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::ids::FrameIndex;
 
@@ -50,6 +52,9 @@ pub const SUPPORT_GAP_M: f32 = 0.01;
 
 /// The span, as a share of a cell's edge, of the draws around a seen-free cell's centre.
 pub const FREE_DRAW_SPREAD: f32 = 0.5;
+
+/// Draws around a seen-free cell's centre before the centre itself is taken.
+pub const FREE_DRAW_TRIES: usize = 4;
 
 /// Which hidden cells the solid prior asks to be solid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -66,73 +71,32 @@ pub enum HiddenCells {
     Enclosed,
 }
 
-/// The evidence of every cell of a box, x fastest.
-struct EvidenceGrid {
-    /// Cells per edge.
-    n: usize,
-    /// Evidence per cell.
-    evidence: Vec<CellEvidence>,
+/// Which cells the seen-free prior asks to be empty.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FreeCells {
+    /// The cells a view saw free.
+    Seen,
+    /// Those, and the hidden cells open sideways onto space a view saw
+    /// through under the object (walking along box x or y through hidden cells, a walk ends at a
+    /// cell seen free or glimpsed with the object's observed surface above it).
+    #[default]
+    SeenAndOpen,
 }
 
-impl EvidenceGrid {
-    fn at(&self, i: usize, j: usize, k: usize) -> CellEvidence {
-        self.evidence[(k * self.n + j) * self.n + i]
-    }
-
-    /// Whether a walk from hidden cell (i, j, k) along ±x or ±y through hidden cells ends at a
-    /// cell seen free or occluded (a walk that leaves the box, or ends at the object's surface or
-    /// an unknown cell, does not).
-    fn open_sideways(&self, i: usize, j: usize, k: usize) -> bool {
-        let n = self.n as isize;
-        [(1isize, 0isize), (-1, 0), (0, 1), (0, -1)].iter().any(|&(di, dj)| {
-            let (mut x, mut y) = (i as isize + di, j as isize + dj);
-            while (0..n).contains(&x) && (0..n).contains(&y) {
-                match self.at(x as usize, y as usize, k) {
-                    CellEvidence::Hidden => (x, y) = (x + di, y + dj),
-                    CellEvidence::SeenFree | CellEvidence::Occluded => return true,
-                    CellEvidence::Surface | CellEvidence::Unknown => return false,
-                }
-            }
-            false
-        })
-    }
-}
-
-/// What the views say of one cell.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CellEvidence {
-    /// A ray passed through it before the surface it measured.
-    SeenFree,
-    /// Not seen free, and behind another surface in some view (the floor under the object, a
-    /// chair under a table's top): what is there may be empty.
-    Occluded,
-    /// At the object's observed surface in some view, and neither seen free nor occluded.
-    Surface,
-    /// Behind the object's observed surface in some view, and none of the above.
-    Hidden,
-    /// No view says anything of it.
-    Unknown,
-}
-
-/// What one view says of one point.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum ViewEvidence {
-    /// Before the measured surface.
-    Free,
-    /// At the object's surface.
-    AtObjectSurface,
-    /// Behind the surface of the object.
-    BehindObject,
-    /// Behind the surface of something else (another object, the background).
-    BehindOther,
-    /// Outside the crop, on invalid depth, or at the surface.
-    Nothing,
+/// The rules that pick the priors' cells: the solid prior's and the seen-free prior's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct CellRules {
+    /// Which hidden cells the solid prior takes.
+    pub hidden: HiddenCells,
+    /// Which cells the seen-free prior takes.
+    pub free: FreeCells,
 }
 
 /// The hidden cells of one object's box, ready to draw prior samples from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HiddenSpace {
-    /// The box the cells divide.
+    /// The box the cells divide: the fitted box stood upright.
     pub world_from_box: Isometry3<f32>,
     /// Edge lengths of one cell (box extents / [`CELLS_PER_AXIS`]).
     pub cell_size: Vector3<f32>,
@@ -140,71 +104,16 @@ pub struct HiddenSpace {
     pub centres: Vec<Point3<f32>>,
     /// Centres of the cells seen free, box frame, in cell order.
     pub free_centres: Vec<Point3<f32>>,
-}
-
-/// What `view` says of the point `p_world`, `margin_m` being how far from the measured surface
-/// a point must lie to be before or behind it.
-fn view_evidence(view: &ObjectView, p_world: &Point3<f32>, margin_m: f32) -> ViewEvidence {
-    let p_camera = view.world_from_camera.inverse_transform_point(p_world);
-    let Some((x, y)) = view.intrinsics.project(&p_camera) else {
-        return ViewEvidence::Nothing;
-    };
-    let (u, v) = (x.round(), y.round());
-    if u < 0.0 || v < 0.0 {
-        return ViewEvidence::Nothing;
-    }
-    let Some(i) = view.index_of(u as u32, v as u32) else {
-        return ViewEvidence::Nothing;
-    };
-    let d = view.depth_m[i];
-    if !(d.is_finite() && d > 0.0) {
-        ViewEvidence::Nothing
-    } else if p_camera.z < d - margin_m {
-        ViewEvidence::Free
-    } else if p_camera.z <= d + margin_m {
-        match view.states[i] {
-            PixelState::ThisObject => ViewEvidence::AtObjectSurface,
-            _ => ViewEvidence::Nothing,
-        }
-    } else {
-        match view.states[i] {
-            PixelState::ThisObject => ViewEvidence::BehindObject,
-            PixelState::OtherObject => ViewEvidence::BehindOther,
-            PixelState::Unknown | PixelState::HiddenSolid | PixelState::BelowSupport | PixelState::SeenFree => {
-                ViewEvidence::Nothing
-            }
-        }
-    }
-}
-
-/// What all `views` together say of the point: seen free in any view wins, then behind another
-/// surface in any (occluded), then at the object's surface in any, then behind it in any
-/// (hidden).
-pub fn cell_evidence(views: &[&ObjectView], p_world: &Point3<f32>, margin_m: f32) -> CellEvidence {
-    let (mut hidden, mut surface, mut occluded) = (false, false, false);
-    for view in views {
-        match view_evidence(view, p_world, margin_m) {
-            ViewEvidence::Free => return CellEvidence::SeenFree,
-            ViewEvidence::AtObjectSurface => surface = true,
-            ViewEvidence::BehindObject => hidden = true,
-            ViewEvidence::BehindOther => occluded = true,
-            ViewEvidence::Nothing => {}
-        }
-    }
-    if occluded {
-        CellEvidence::Occluded
-    } else if surface {
-        CellEvidence::Surface
-    } else if hidden {
-        CellEvidence::Hidden
-    } else {
-        CellEvidence::Unknown
-    }
+    /// Centres of the open hidden cells the seen-free prior draws around too (under
+    /// [`FreeCells::SeenAndOpen`]; else none), box frame, in cell order.
+    pub open_centres: Vec<Point3<f32>>,
 }
 
 impl HiddenSpace {
-    /// The hidden cells of `object_box` (world) given the object's keyframe crops `views`.
-    pub fn of_views(views: &[&ObjectView], object_box: &OrientedBox, rule: HiddenCells) -> Self {
+    /// The prior cells of `object_box` (world) given the object's keyframe crops `views`, picked
+    /// by `rules`.
+    pub fn of_views(views: &[&ObjectView], object_box: &OrientedBox, rules: CellRules) -> Self {
+        let object_box = &object_box.upright();
         let n = CELLS_PER_AXIS;
         let cell_size = object_box.extents() / n as f32;
         let margin_m = 0.5 * cell_size.norm();
@@ -222,14 +131,19 @@ impl HiddenSpace {
             }
         }
         let grid = EvidenceGrid { n, evidence };
-        let (mut centres, mut free_centres) = (Vec::new(), Vec::new());
+        let (mut centres, mut free_centres, mut open_centres) = (Vec::new(), Vec::new(), Vec::new());
         for k in 0..n {
             for j in 0..n {
                 for i in 0..n {
+                    let open_free = rules.free == FreeCells::SeenAndOpen;
                     match grid.at(i, j, k) {
                         CellEvidence::SeenFree => free_centres.push(centre_of(i, j, k)),
-                        CellEvidence::Hidden if rule == HiddenCells::All || !grid.open_sideways(i, j, k) => {
-                            centres.push(centre_of(i, j, k))
+                        CellEvidence::Hidden => {
+                            if rules.hidden == HiddenCells::All || !grid.open_sideways(i, j, k) {
+                                centres.push(centre_of(i, j, k))
+                            } else if open_free && grid.opens_under_the_object(i, j, k) {
+                                open_centres.push(centre_of(i, j, k))
+                            }
                         }
                         _ => {}
                     }
@@ -241,6 +155,7 @@ impl HiddenSpace {
             cell_size,
             centres,
             free_centres,
+            open_centres,
         }
     }
 
@@ -249,6 +164,7 @@ impl HiddenSpace {
         PriorCells {
             hidden: self.centres.len(),
             seen_free: self.free_centres.len(),
+            open: self.open_centres.len(),
         }
     }
 
@@ -262,13 +178,39 @@ impl HiddenSpace {
         self.draw_around(&self.centres, 1.0, rng)
     }
 
-    /// A point drawn near a cell seen free (world frame), `None` when there is none: in the
-    /// span [`FREE_DRAW_SPREAD`] × the cell's edges around a free cell's centre. The view saw
-    /// the centre free, by the cell's half diagonal before the surface on the centre's pixel;
-    /// the cell's corners lie on other pixels, which may see something nearer (a lamp's 3 cm
-    /// base in the bottom of a 10 cm cell).
-    pub fn draw_free(&self, rng: &mut impl Rng) -> Option<Point3<f32>> {
-        self.draw_around(&self.free_centres, FREE_DRAW_SPREAD, rng)
+    /// Whether the seen-free prior has cells to draw from.
+    pub fn has_free_cells(&self) -> bool {
+        !(self.free_centres.is_empty() && self.open_centres.is_empty())
+    }
+
+    /// A point drawn near a cell seen free or an open cell (world frame, one cell drawn uniformly
+    /// from both), `None` when there is none: in the span [`FREE_DRAW_SPREAD`] × the cell's edges
+    /// around its centre. A view saw a seen-free cell's centre free, by the cell's half diagonal
+    /// before the surface on the centre's pixel; the span's other points lie on other pixels,
+    /// which may see something nearer (a lamp's 2.6 cm pole beside a cell 2.75 cm wide). A point
+    /// around a seen-free centre is kept only when one of `views` sees it free by
+    /// [`GLIMPSE_MARGIN_M`]; after [`FREE_DRAW_TRIES`] misses the centre itself is taken. Open
+    /// cells no view saw into: their points are not checked.
+    pub fn draw_free(&self, views: &[&ObjectView], rng: &mut impl Rng) -> Option<Point3<f32>> {
+        let (seen, open) = (self.free_centres.len(), self.open_centres.len());
+        if seen + open == 0 {
+            return None;
+        }
+        let pick = rng.random_range(0..seen + open);
+        if pick >= seen {
+            return Some(self.around(self.open_centres[pick - seen], FREE_DRAW_SPREAD, rng));
+        }
+        let centre = self.free_centres[pick];
+        for _ in 0..FREE_DRAW_TRIES {
+            let p = self.around(centre, FREE_DRAW_SPREAD, rng);
+            if views
+                .iter()
+                .any(|v| view_evidence(v, &p, GLIMPSE_MARGIN_M) == ViewEvidence::Free)
+            {
+                return Some(p);
+            }
+        }
+        Some(self.world_from_box * centre)
     }
 
     /// A point drawn uniformly in the span `spread` × the cell's edges around one of `centres`
@@ -278,8 +220,14 @@ impl HiddenSpace {
             return None;
         }
         let centre = centres[rng.random_range(0..centres.len())];
+        Some(self.around(centre, spread, rng))
+    }
+
+    /// A point drawn uniformly in the span `spread` × the cell's edges around `centre` (box
+    /// frame), in the world frame.
+    fn around(&self, centre: Point3<f32>, spread: f32, rng: &mut impl Rng) -> Point3<f32> {
         let jitter = Vector3::from_fn(|a, _| (rng.random::<f32>() - 0.5) * spread * self.cell_size[a]);
-        Some(self.world_from_box * (centre + jitter))
+        self.world_from_box * (centre + jitter)
     }
 
     /// A point drawn uniformly under the box (world frame): in the slab [`BELOW_SUPPORT_M`] below
@@ -301,13 +249,16 @@ pub struct PriorCells {
     pub hidden: usize,
     /// Cells seen free, asked to be empty around their centres.
     pub seen_free: usize,
+    /// Open hidden cells, asked to be empty around their centres.
+    #[serde(default)]
+    pub open: usize,
 }
 
 /// One object's hidden space, recomputed only when its keyframes or its box changed.
 #[derive(Debug, Clone, Default)]
 pub struct HiddenSpaceCache {
-    /// The frames of the views, the box and the rule the space was computed from, and the space.
-    computed: Option<((Vec<FrameIndex>, OrientedBox, HiddenCells), HiddenSpace)>,
+    /// The frames of the views, the box and the rules the space was computed from, and the space.
+    computed: Option<((Vec<FrameIndex>, OrientedBox, CellRules), HiddenSpace)>,
 }
 
 impl HiddenSpaceCache {
@@ -319,8 +270,8 @@ impl HiddenSpaceCache {
     /// The hidden space of `object_box` given `views`: the stored one when it was computed from
     /// the same frames and box, else computed now (the same inputs give the same space, so a run
     /// resumed with an empty cache continues bit-identically).
-    pub fn current(&mut self, views: &[&ObjectView], object_box: &OrientedBox, rule: HiddenCells) -> &HiddenSpace {
-        let key = (views.iter().map(|v| v.frame).collect::<Vec<_>>(), *object_box, rule);
+    pub fn current(&mut self, views: &[&ObjectView], object_box: &OrientedBox, rules: CellRules) -> &HiddenSpace {
+        let key = (views.iter().map(|v| v.frame).collect::<Vec<_>>(), *object_box, rules);
         if self
             .computed
             .as_ref()
@@ -330,7 +281,7 @@ impl HiddenSpaceCache {
         }
         &self
             .computed
-            .get_or_insert_with(|| (key, HiddenSpace::of_views(views, object_box, rule)))
+            .get_or_insert_with(|| (key, HiddenSpace::of_views(views, object_box, rules)))
             .1
     }
 }

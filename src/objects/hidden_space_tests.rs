@@ -3,10 +3,25 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use super::*;
 use crate::field::free_space::ray_box_interval;
 use crate::ids::FrameIndex;
+use crate::objects::cell_evidence::{CellEvidence, cell_evidence};
+use crate::objects::object_view::PixelState;
 use crate::rng::{RngStream, seeded_rng};
 use crate::sensor::frame::CameraIntrinsics;
 use crate::sensor::pixel_box::PixelBox;
 use crate::synth::trajectory::look_rotation;
+
+/// Every hidden cell solid, free draws around the cells seen free only (the rules before open
+/// cells).
+const ALL: CellRules = CellRules {
+    hidden: HiddenCells::All,
+    free: FreeCells::Seen,
+};
+
+/// Enclosed hidden cells solid, free draws around the cells seen free only.
+const ENCLOSED: CellRules = CellRules {
+    hidden: HiddenCells::Enclosed,
+    free: FreeCells::Seen,
+};
 
 /// An axis-aligned box of the constructed scene, and whether it is the object.
 struct Solid {
@@ -96,13 +111,13 @@ fn cells_behind_the_seen_face_are_hidden_and_cells_seen_through_are_not() {
         cell_evidence(&[&front], &Point3::new(0.0, 0.9, 0.2), margin),
         CellEvidence::SeenFree
     );
-    let only_front = HiddenSpace::of_views(&[&front], &object_box, HiddenCells::All);
+    let only_front = HiddenSpace::of_views(&[&front], &object_box, ALL);
     assert!(only_front.hidden_share() > 0.8, "{}", only_front.hidden_share());
     // A side view sees the slab's edge and the room through the rest of the box: the cells
     // behind the slab are seen free, only the slab's own cells stay hidden.
     let side = render([2.0, 1.2, 0.2], -std::f32::consts::FRAC_PI_2, &scene);
     assert_eq!(cell_evidence(&[&front, &side], &behind, margin), CellEvidence::SeenFree);
-    let both = HiddenSpace::of_views(&[&front, &side], &object_box, HiddenCells::All);
+    let both = HiddenSpace::of_views(&[&front, &side], &object_box, ALL);
     assert!(both.hidden_share() < 0.2, "{}", both.hidden_share());
     for c in &both.centres {
         let world = both.world_from_box * c;
@@ -122,7 +137,7 @@ fn cells_behind_another_object_are_not_hidden() {
         is_object: false,
     });
     let front = render([0.0, -1.0, 0.2], 0.0, &scene);
-    let space = HiddenSpace::of_views(&[&front], &object_box, HiddenCells::All);
+    let space = HiddenSpace::of_views(&[&front], &object_box, ALL);
     assert!(space.centres.is_empty(), "{} hidden cells", space.centres.len());
     assert!(space.draw(&mut seeded_rng(0, RngStream::Mapper)).is_none());
 }
@@ -131,7 +146,7 @@ fn cells_behind_another_object_are_not_hidden() {
 fn drawn_points_lie_in_hidden_cells() {
     let (scene, object_box) = slab_and_box();
     let front = render([0.0, -1.0, 0.2], 0.0, &scene);
-    let space = HiddenSpace::of_views(&[&front], &object_box, HiddenCells::All);
+    let space = HiddenSpace::of_views(&[&front], &object_box, ALL);
     let mut rng = seeded_rng(3, RngStream::Mapper);
     for _ in 0..200 {
         let p = space.draw(&mut rng).expect("hidden cells");
@@ -222,8 +237,8 @@ fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
             .filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y))
             .count()
     };
-    let all = HiddenSpace::of_views(&views, &table_box(), HiddenCells::All);
-    let enclosed = HiddenSpace::of_views(&views, &table_box(), HiddenCells::Enclosed);
+    let all = HiddenSpace::of_views(&views, &table_box(), ALL);
+    let enclosed = HiddenSpace::of_views(&views, &table_box(), ENCLOSED);
     assert!(under_top(&all) > 50, "{} hidden cells under the top", under_top(&all));
     assert_eq!(
         under_top(&enclosed),
@@ -248,15 +263,40 @@ fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
     );
     let mut rng = seeded_rng(3, RngStream::Mapper);
     for _ in 0..200 {
-        let p = enclosed.draw_free(&mut rng).expect("cells seen free");
+        let p = enclosed.draw_free(&views, &mut rng).expect("cells seen free");
         let near = free_world
             .iter()
             .any(|c| (0..3).all(|a| (p[a] - c[a]).abs() <= 0.25 * enclosed.cell_size[a] + 1e-5));
         assert!(near, "{p:?} within a quarter cell of a seen-free centre");
     }
+    // Under the rule of open cells, the hidden cells under the top that open onto the space the
+    // +x view saw under its back half are drawn free too; none is solid.
+    let open = HiddenSpace::of_views(
+        &views,
+        &table_box(),
+        CellRules {
+            hidden: HiddenCells::Enclosed,
+            free: FreeCells::SeenAndOpen,
+        },
+    );
+    assert_eq!(
+        open.centres, enclosed.centres,
+        "the free rule does not pick solid cells"
+    );
+    assert_eq!(open.free_centres, enclosed.free_centres);
+    let open_under_top = open
+        .open_centres
+        .iter()
+        .map(|c| open.world_from_box * c)
+        .filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y))
+        .count();
+    assert!(
+        open_under_top > 50,
+        "{open_under_top} open cells under the top drawn free"
+    );
     // Seen from the front and above only, the space under the top is enclosed: the apron in
     // front, the box's faces elsewhere.
-    let closed = HiddenSpace::of_views(&[&above, &low], &table_box(), HiddenCells::Enclosed);
+    let closed = HiddenSpace::of_views(&[&above, &low], &table_box(), ENCLOSED);
     assert!(
         under_top(&closed) > 50,
         "{} enclosed cells under the top",
@@ -286,8 +326,8 @@ fn space_under_an_overhang_that_opens_onto_occluded_space_is_not_enclosed() {
             .filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y))
             .count()
     };
-    let all = HiddenSpace::of_views(&views, &table_box(), HiddenCells::All);
-    let enclosed = HiddenSpace::of_views(&views, &table_box(), HiddenCells::Enclosed);
+    let all = HiddenSpace::of_views(&views, &table_box(), ALL);
+    let enclosed = HiddenSpace::of_views(&views, &table_box(), ENCLOSED);
     assert!(
         front_half(&all) > 50,
         "{} hidden cells in the front half",
@@ -301,11 +341,184 @@ fn the_cache_recomputes_when_the_box_changes_and_only_then() {
     let (scene, object_box) = slab_and_box();
     let front = render([0.0, -1.0, 0.2], 0.0, &scene);
     let mut cache = HiddenSpaceCache::default();
-    let first = cache.current(&[&front], &object_box, HiddenCells::All).clone();
-    assert_eq!(first, HiddenSpace::of_views(&[&front], &object_box, HiddenCells::All));
+    let first = cache.current(&[&front], &object_box, ALL).clone();
+    assert_eq!(first, HiddenSpace::of_views(&[&front], &object_box, ALL));
     let shallower = aabb([-0.2, 1.0, 0.0], [0.2, 1.2, 0.4]);
-    let second = cache.current(&[&front], &shallower, HiddenCells::All).clone();
+    let second = cache.current(&[&front], &shallower, ALL).clone();
     assert_ne!(second, first, "a new box, a new space");
-    assert_eq!(second, HiddenSpace::of_views(&[&front], &shallower, HiddenCells::All));
-    assert_eq!(*cache.current(&[&front], &object_box, HiddenCells::All), first);
+    assert_eq!(second, HiddenSpace::of_views(&[&front], &shallower, ALL));
+    assert_eq!(*cache.current(&[&front], &object_box, ALL), first);
+}
+
+/// A bed (the object): a frame 12–50 cm high over [−0.75, 0.75] × [1, 3] on four legs, a
+/// headboard at its back up to 1 m; the floor (another object) under it.
+fn bed_on_the_floor() -> (Vec<Solid>, OrientedBox) {
+    let object = |min, max| Solid {
+        aabb: aabb(min, max),
+        is_object: true,
+    };
+    let mut scene = vec![
+        object([-0.75, 1.0, 0.12], [0.75, 2.94, 0.5]),
+        object([-0.75, 2.94, 0.0], [0.75, 3.0, 1.0]),
+        Solid {
+            aabb: aabb([-5.0, -5.0, -0.1], [5.0, 5.0, 0.0]),
+            is_object: false,
+        },
+    ];
+    for (x, y) in [(-0.75, 1.0), (0.69, 1.0)] {
+        scene.push(object([x, y, 0.0], [x + 0.06, y + 0.06, 0.12]));
+    }
+    (scene, aabb([-0.75, 1.0, 0.0], [0.75, 3.0, 1.0]))
+}
+
+/// Views of the bed from the front and both sides, 1.4 m high, looking down.
+fn bed_views(scene: &[Solid]) -> [ObjectView; 3] {
+    let half_pi = std::f32::consts::FRAC_PI_2;
+    [
+        render_pitched([0.0, -0.6, 1.4], 0.0, -0.5, scene),
+        render_pitched([2.6, 2.0, 1.4], -half_pi, -0.5, scene),
+        render_pitched([-2.6, 2.0, 1.4], half_pi, -0.5, scene),
+    ]
+}
+
+#[test]
+fn the_floor_glimpsed_under_a_frame_opens_the_gap_and_only_the_gap() {
+    let (scene, bed_box) = bed_on_the_floor();
+    let [front, right, left] = bed_views(&scene);
+    let views = [&front, &right, &left];
+    // The bed's cells are 9.4 × 12.5 × 6.25 cm (half diagonal 8.4 cm). A cell's centre 3 cm
+    // above the floor under the frame's front edge: the views see the floor behind it, nearer
+    // than the half diagonal, but farther than the glimpse margin.
+    let half_diagonal = 0.5 * (bed_box.extents() / CELLS_PER_AXIS as f32).norm();
+    let under_the_edge = Point3::new(0.0, 1.06, 0.03);
+    assert_eq!(
+        cell_evidence(&views, &under_the_edge, half_diagonal),
+        CellEvidence::Glimpsed
+    );
+    // Under the middle of the frame no view reaches: behind the frame, hidden.
+    assert_eq!(
+        cell_evidence(&views, &Point3::new(0.0, 2.0, 0.03), half_diagonal),
+        CellEvidence::Hidden
+    );
+    let in_the_gap = |p: &Point3<f32>| p.z < 0.12 && (1.3..2.7).contains(&p.y) && p.x.abs() < 0.6;
+    let in_the_frame = |p: &Point3<f32>| (0.15..0.47).contains(&p.z) && (1.3..2.7).contains(&p.y) && p.x.abs() < 0.6;
+    let world = |space: &HiddenSpace, cells: &[Point3<f32>]| -> Vec<Point3<f32>> {
+        cells.iter().map(|c| space.world_from_box * c).collect()
+    };
+    let open = CellRules {
+        hidden: HiddenCells::Enclosed,
+        free: FreeCells::SeenAndOpen,
+    };
+    let space = HiddenSpace::of_views(&views, &bed_box, open);
+    let solid = world(&space, &space.centres);
+    let free = [world(&space, &space.free_centres), world(&space, &space.open_centres)].concat();
+    assert!(
+        !solid.iter().any(in_the_gap),
+        "the gap opens onto the glimpsed floor: no solid cell in it"
+    );
+    assert!(
+        solid.iter().filter(|p| in_the_frame(p)).count() > 100,
+        "the frame's inside, enclosed by its seen sides, stays solid"
+    );
+    assert!(!free.iter().any(in_the_frame), "no free draw inside the frame");
+    assert!(
+        free.iter().filter(|p| in_the_gap(p)).count() > 50,
+        "the gap under the frame's middle joins the seen-free prior: {}",
+        free.iter().filter(|p| in_the_gap(p)).count()
+    );
+    // Under the rule of the cells seen free alone, the gap's middle is left to the field.
+    let seen = HiddenSpace::of_views(&views, &bed_box, ENCLOSED);
+    assert_eq!(seen.centres, space.centres, "the free rule does not pick hidden cells");
+    assert!(seen.open_centres.is_empty());
+}
+
+#[test]
+fn space_seen_beside_the_object_does_not_open_its_inside() {
+    // A sofa's back (the object) 50 cm high beside its arm, 20 cm high, in one box: from the
+    // front and above the back's inside is hidden, and past the back's end, above the arm, the
+    // views see free space. A walk from the back's inside along x ends there: the back's end
+    // face, a cell's half diagonal from the cells that hold it, is not at its surface. That
+    // space is beside the object, not under it: the back's inside is not drawn free.
+    let object = |min, max| Solid {
+        aabb: aabb(min, max),
+        is_object: true,
+    };
+    let scene = [
+        object([-0.5, 1.0, 0.3], [0.3, 1.2, 0.8]),
+        object([0.3, 1.0, 0.3], [0.5, 1.2, 0.5]),
+    ];
+    let sofa_box = aabb([-0.5, 1.0, 0.3], [0.5, 1.2, 0.8]);
+    let views = [
+        render_pitched([0.0, -0.5, 1.2], 0.0, -0.4, &scene),
+        render_pitched([0.0, 1.1, 2.5], 0.0, -1.45, &scene),
+    ];
+    let views: Vec<&ObjectView> = views.iter().collect();
+    let margin = 0.5 * (sofa_box.extents() / CELLS_PER_AXIS as f32).norm();
+    assert_eq!(
+        cell_evidence(&views, &Point3::new(0.45, 1.1, 0.7), margin),
+        CellEvidence::SeenFree,
+        "above the arm"
+    );
+    let inside_the_back = |p: &Point3<f32>| p.x < 0.28 && p.y > 1.02 && (0.32..0.78).contains(&p.z);
+    let space = HiddenSpace::of_views(
+        &views,
+        &sofa_box,
+        CellRules {
+            hidden: HiddenCells::Enclosed,
+            free: FreeCells::SeenAndOpen,
+        },
+    );
+    let all = HiddenSpace::of_views(&views, &sofa_box, ALL);
+    let hidden_inside = all
+        .centres
+        .iter()
+        .filter(|c| inside_the_back(&(all.world_from_box * *c)));
+    assert!(hidden_inside.count() > 100, "the back's inside is hidden");
+    let drawn_free = space
+        .free_centres
+        .iter()
+        .chain(&space.open_centres)
+        .filter(|c| inside_the_back(&(space.world_from_box * *c)))
+        .count();
+    assert_eq!(drawn_free, 0, "cells inside the back drawn free");
+}
+
+#[test]
+fn draws_around_cells_seen_free_stay_out_of_the_object() {
+    // A block (the object) with its front face at y = 1 in a box of 10 cm cells, the first row
+    // of cells centred 2 cm before that face. A view from the side sees those centres free (its
+    // rays run along the face), but a quarter cell around them reaches 0.5 cm into the block —
+    // as a quarter of a lamp's 2.75 cm cell beside its 2.6 cm pole reaches into the pole. Only
+    // points a view sees free are drawn.
+    let scene = [Solid {
+        aabb: aabb([-0.8, 1.0, 0.0], [0.8, 1.6, 0.8]),
+        is_object: true,
+    }];
+    let views = [
+        render([0.0, -1.0, 0.4], 0.0, &scene),
+        render([2.0, 1.0, 0.4], -std::f32::consts::FRAC_PI_2, &scene),
+    ];
+    let views: Vec<&ObjectView> = views.iter().collect();
+    let object_box = aabb([-0.8, 0.93, 0.0], [0.8, 2.53, 0.8]);
+    let space = HiddenSpace::of_views(&views, &object_box, ENCLOSED);
+    let first_row = |p: &Point3<f32>| (p.y - 0.98).abs() < 1e-3;
+    let world = |c: &Point3<f32>| space.world_from_box * c;
+    assert!(
+        space.free_centres.iter().map(world).filter(first_row).count() > 10,
+        "the side view sees the first row free"
+    );
+    let in_block = |p: &Point3<f32>| (1.0..1.6).contains(&p.y) && p.x.abs() < 0.8 && (0.0..0.8).contains(&p.z);
+    let mut rng = seeded_rng(5, RngStream::Mapper);
+    let inside = (0..20_000)
+        .filter(|_| in_block(&space.draw_free(&views, &mut rng).expect("cells seen free")))
+        .count();
+    assert_eq!(inside, 0, "free draws inside the block");
+    // Unchecked, the same draws reach into it.
+    let unchecked = (0..20_000)
+        .filter(|_| {
+            let p = space.draw_around(&space.free_centres, FREE_DRAW_SPREAD, &mut rng);
+            in_block(&p.expect("cells seen free"))
+        })
+        .count();
+    assert!(unchecked > 100, "{unchecked} unchecked draws in the block");
 }
