@@ -17,7 +17,9 @@
 //! rule accepts it. A member is too partial to decide when its two best candidates' two-way
 //! distances lie within `undecided_margin` of each other (a chair seen only by its seat fits
 //! both designs): it keeps a subcategory of its own rather than join a wrong design. A member no
-//! candidate accepts is its own subcategory too.
+//! candidate accepts is its own subcategory too. The pairs only the second pass asks may keep an
+//! alignment found on nearly the same clouds ([`PairRegistration::register_again`]): a class
+//! registers again whenever one member's cloud grew, and most of those pairs did not change.
 
 use std::collections::BTreeMap;
 
@@ -107,6 +109,21 @@ pub trait PairRegistration {
     fn register(&self, source: ObjectId, template: ObjectId) -> Result<(Isometry3<f32>, f32)>;
     /// The normalised distance from `template` to `source` aligned by `template_from_source`.
     fn reverse_chamfer(&self, source: ObjectId, template: ObjectId, template_from_source: &Isometry3<f32>) -> f32;
+    /// Registers `source` to `template` for the best-explanation pass (a candidate the greedy
+    /// pass did not ask about this member): as [`PairRegistration::register`], except that an
+    /// implementation may keep an alignment it found on nearly the same clouds.
+    fn register_again(&self, source: ObjectId, template: ObjectId) -> Result<(Isometry3<f32>, f32)> {
+        self.register(source, template)
+    }
+}
+
+/// Which pass asks a pair.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Pass {
+    /// The paper's greedy pass.
+    Greedy,
+    /// The best-explanation pass.
+    Best,
 }
 
 /// Splits `members` of one class into subcategories. `reliable_rays` ranks candidates for
@@ -146,7 +163,7 @@ pub fn subcategorize(
             use rayon::prelude::*;
             others
                 .par_iter()
-                .map(|&id| (id, decide(id, representative, rule, registration)))
+                .map(|&id| (id, decide(id, representative, rule, registration, Pass::Greedy)))
                 .collect()
         };
         remaining.clear();
@@ -258,7 +275,7 @@ fn explain(
     rule: &SubcategoryRule,
     registration: &impl PairRegistration,
 ) -> Option<Explanation> {
-    let mut alignment = decide(id, representative, rule, registration)?;
+    let mut alignment = decide(id, representative, rule, registration, Pass::Best)?;
     if alignment.reverse_chamfer.is_none() {
         alignment.reverse_chamfer =
             Some(registration.reverse_chamfer(id, representative, &alignment.template_from_object));
@@ -288,8 +305,13 @@ fn decide(
     representative: ObjectId,
     rule: &SubcategoryRule,
     registration: &impl PairRegistration,
+    pass: Pass,
 ) -> Option<Alignment> {
-    let (template_from_object, chamfer) = match registration.register(id, representative) {
+    let registered = match pass {
+        Pass::Greedy => registration.register(id, representative),
+        Pass::Best => registration.register_again(id, representative),
+    };
+    let (template_from_object, chamfer) = match registered {
         Ok(r) => r,
         Err(e) => {
             tracing::warn!(object = %id, representative = %representative, error = %e, "registration failed");

@@ -185,28 +185,28 @@ impl HiddenSpace {
 
     /// A point drawn near a cell seen free or an open cell (world frame, one cell drawn uniformly
     /// from both), `None` when there is none: in the span [`FREE_DRAW_SPREAD`] × the cell's edges
-    /// around its centre. A view saw a seen-free cell's centre free, by the cell's half diagonal
-    /// before the surface on the centre's pixel; the span's other points lie on other pixels,
-    /// which may see something nearer (a lamp's 2.6 cm pole beside a cell 2.75 cm wide). A point
-    /// around a seen-free centre is kept only when one of `views` sees it free by
-    /// [`GLIMPSE_MARGIN_M`]; after [`FREE_DRAW_TRIES`] misses the centre itself is taken. Open
-    /// cells no view saw into: their points are not checked.
+    /// around its centre, checked against `views`. A view saw a seen-free cell's centre free, by
+    /// the cell's half diagonal before the surface on the centre's pixel; the span's other points
+    /// lie on other pixels, which may see something nearer (a lamp's 2.6 cm pole beside a cell
+    /// 2.75 cm wide): a point around a seen-free centre is kept only when a view sees it free by
+    /// [`GLIMPSE_MARGIN_M`]. No view saw into an open cell: a point around its centre is kept
+    /// unless a view sees the object's surface within [`GLIMPSE_MARGIN_M`] of it (the pole under
+    /// a lamp's shade). After [`FREE_DRAW_TRIES`] misses the centre itself is taken.
     pub fn draw_free(&self, views: &[&ObjectView], rng: &mut impl Rng) -> Option<Point3<f32>> {
         let (seen, open) = (self.free_centres.len(), self.open_centres.len());
         if seen + open == 0 {
             return None;
         }
         let pick = rng.random_range(0..seen + open);
-        if pick >= seen {
-            return Some(self.around(self.open_centres[pick - seen], FREE_DRAW_SPREAD, rng));
-        }
-        let centre = self.free_centres[pick];
+        let (centre, wanted, kept_if_seen) = if pick < seen {
+            (self.free_centres[pick], ViewEvidence::Free, true)
+        } else {
+            (self.open_centres[pick - seen], ViewEvidence::AtObjectSurface, false)
+        };
         for _ in 0..FREE_DRAW_TRIES {
             let p = self.around(centre, FREE_DRAW_SPREAD, rng);
-            if views
-                .iter()
-                .any(|v| view_evidence(v, &p, GLIMPSE_MARGIN_M) == ViewEvidence::Free)
-            {
+            let seen_so = views.iter().any(|v| view_evidence(v, &p, GLIMPSE_MARGIN_M) == wanted);
+            if seen_so == kept_if_seen {
                 return Some(p);
             }
         }

@@ -521,4 +521,30 @@ fn draws_around_cells_seen_free_stay_out_of_the_object() {
         })
         .count();
     assert!(unchecked > 100, "{unchecked} unchecked draws in the block");
+    // The same cells as open cells (no view saw into them): a point is kept unless a view sees
+    // the block's surface within 2 cm of it — the front view does, for every point in the block.
+    let as_open = HiddenSpace {
+        open_centres: space.free_centres.clone(),
+        free_centres: Vec::new(),
+        ..space.clone()
+    };
+    let near_face =
+        |p: &Point3<f32>| in_block(p) || ((0.99..1.0).contains(&p.y) && p.x.abs() < 0.8 && (0.0..0.8).contains(&p.z));
+    let open_inside = (0..20_000)
+        .filter(|_| near_face(&as_open.draw_free(&views, &mut rng).expect("open cells")))
+        .count();
+    assert_eq!(
+        open_inside, 0,
+        "open draws in the block or within 1 cm of its seen face"
+    );
+    let open_unchecked = (0..20_000)
+        .filter(|_| {
+            let p = as_open.draw_around(&as_open.open_centres, FREE_DRAW_SPREAD, &mut rng);
+            near_face(&p.expect("open cells"))
+        })
+        .count();
+    assert!(
+        open_unchecked > 100,
+        "{open_unchecked} unchecked open draws near the face"
+    );
 }

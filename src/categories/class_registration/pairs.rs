@@ -143,6 +143,28 @@ impl<'a> ClassClouds<'a> {
     }
 }
 
+impl ClassClouds<'_> {
+    /// The pair's stored alignment, rescored on today's clouds, when neither cloud grew by more
+    /// than `growth` since it was found (on nearly the same clouds the search would find the same
+    /// alignment); `None` otherwise.
+    fn kept(&self, source: ObjectId, template: ObjectId, now: PairPoints) -> Option<Result<(Isometry3<f32>, f32)>> {
+        let stored = self.cache.0.get(&(source, template))?;
+        if !stored.found_at.still_hold(now, self.growth) {
+            return None;
+        }
+        let (s, t) = match (self.cloud(source), self.cloud(template)) {
+            (Ok(s), Ok(t)) => (s, t),
+            (Err(e), _) | (_, Err(e)) => return Some(Err(e)),
+        };
+        let pose = stored.template_from_source;
+        let aligned: Vec<Point3<f32>> = s.iter().map(|p| pose * p).collect();
+        Some(
+            normalised_one_way_chamfer(&aligned, t)
+                .map(|score| self.record(source, template, (pose, score), stored.found_at)),
+        )
+    }
+}
+
 impl PairRegistration for ClassClouds<'_> {
     fn register(&self, source: ObjectId, template: ObjectId) -> Result<(Isometry3<f32>, f32)> {
         if let Some(answer) = self.answered_now(source, template) {
@@ -167,14 +189,9 @@ impl PairRegistration for ClassClouds<'_> {
         }
         let previous = self.cache.0.get(&(source, template));
         if self.start == RegistrationStart::Reuse
-            && let Some(stored) = previous
-            && stored.found_at.still_hold(now, self.growth)
+            && let Some(answer) = self.kept(source, template, now)
         {
-            // The same pair on nearly the same clouds: the search would find the same alignment.
-            let pose = stored.template_from_source;
-            let aligned: Vec<Point3<f32>> = s.iter().map(|p| pose * p).collect();
-            let score = normalised_one_way_chamfer(&aligned, t)?;
-            return Ok(self.record(source, template, (pose, score), stored.found_at));
+            return answer;
         }
         let warm = match previous {
             Some(stored) if self.start == RegistrationStart::Warm => {
@@ -193,6 +210,30 @@ impl PairRegistration for ClassClouds<'_> {
             _ => full,
         };
         Ok(self.record(source, template, (best.template_from_source(), best.score), now))
+    }
+
+    /// The best-explanation pass's pairs keep their alignment while neither cloud grew by more
+    /// than `reregister_growth` since it was found (as `reuse` does for every pair): which
+    /// candidate explains a member best is decided on alignments at most that stale, and the
+    /// greedy pass's pairs are searched as `start` says.
+    fn register_again(&self, source: ObjectId, template: ObjectId) -> Result<(Isometry3<f32>, f32)> {
+        if let Some(answer) = self.answered_now(source, template) {
+            return Ok(answer);
+        }
+        let size = |id| self.sizes.get(&id).copied().unwrap_or(0);
+        let now = PairPoints {
+            source: size(source),
+            template: size(template),
+        };
+        if self
+            .cache
+            .unchanged(source, template, self.versions_of(source, template))
+            .is_none()
+            && let Some(answer) = self.kept(source, template, now)
+        {
+            return answer;
+        }
+        self.register(source, template)
     }
 
     fn reverse_chamfer(&self, source: ObjectId, template: ObjectId, template_from_source: &Isometry3<f32>) -> f32 {

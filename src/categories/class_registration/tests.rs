@@ -274,3 +274,76 @@ fn a_reused_pair_keeps_its_alignment_until_a_cloud_grows() {
     let searched = register_class(&grown, &first_time(), &starting(RegistrationStart::Search), 7).unwrap();
     assert_eq!(chair(&after), chair(&searched), "exactly the full search's result");
 }
+
+#[test]
+fn the_best_explanation_pass_keeps_its_own_pairs_until_a_cloud_grows_by_the_growth() {
+    use crate::categories::subcategories::SubcategoryAssignment;
+    use crate::geometry::oriented_box::fit_minimum_volume_box;
+    use crate::synth::{Design, RegistrationTrial, RegistrationTrialSpec};
+    // Two chairs and two tables, the chairs ranked first: the greedy pass groups the chairs
+    // under chair 1 and the tables under table 3; the best pass asks chair 2 about table 3,
+    // which the greedy pass never did.
+    let spec = RegistrationTrialSpec {
+        outlier_fraction: 0.0,
+        visible: (0.7, 0.8),
+        ..RegistrationTrialSpec::default()
+    };
+    let members: Vec<MemberInput> = [
+        (1, Design::LadderBackChair, 1),
+        (2, Design::LadderBackChair, 2),
+        (3, Design::DiningTable, 3),
+        (4, Design::DiningTable, 4),
+    ]
+    .into_iter()
+    .map(|(id, design, seed)| {
+        let trial = RegistrationTrial::draw(design, &spec, seed).unwrap();
+        MemberInput {
+            id: ObjectId(id),
+            bounds: fit_minimum_volume_box(&trial.source).unwrap(),
+            cloud: trial.source,
+            cloud_version: 1,
+            reliable_rays: 10 - id as usize,
+        }
+    })
+    .collect();
+    let mut cfg = starting(RegistrationStart::Search);
+    cfg.subcategories.assignment = Some(SubcategoryAssignment::Best);
+    let first = register_class(&members, &first_time(), &cfg, 7).unwrap();
+    assert_eq!(
+        groups(&first),
+        vec![
+            (ObjectId(1), vec![ObjectId(1), ObjectId(2)]),
+            (ObjectId(3), vec![ObjectId(3), ObjectId(4)])
+        ]
+    );
+    let (greedy_pair, best_pair) = ((ObjectId(2), ObjectId(1)), (ObjectId(2), ObjectId(3)));
+    assert!(
+        first.pairs.0.contains_key(&best_pair),
+        "the best pass asked chair 2 about table 3"
+    );
+    let found_at = |registered: &ClassRegistration, pair| registered.pairs.0[&pair].found_at.source;
+
+    // Chair 2's cloud grows by a tenth (its points again, shifted by 1 mm): the greedy pass
+    // searches its pair anew, the best pass keeps its own.
+    let grow = |members: &[MemberInput], share: usize| {
+        let mut grown = members.to_vec();
+        let extra: Vec<Point3<f32>> = grown[1]
+            .cloud
+            .iter()
+            .step_by(share)
+            .map(|p| p + nalgebra::Vector3::new(0.001, 0.0, 0.0))
+            .collect();
+        grown[1].cloud.extend(extra);
+        grown[1].cloud_version += 1;
+        grown
+    };
+    let tenth = grow(&members, 10);
+    let again = register_class(&tenth, &first, &cfg, 7).unwrap();
+    assert_eq!(groups(&again), groups(&first));
+    assert_eq!(found_at(&again, greedy_pair), tenth[1].cloud.len(), "searched anew");
+    assert_eq!(found_at(&again, best_pair), members[1].cloud.len(), "kept");
+    // Grown by half: searched anew too.
+    let half = grow(&members, 2);
+    let after = register_class(&half, &first, &cfg, 7).unwrap();
+    assert_eq!(found_at(&after, best_pair), half[1].cloud.len());
+}
