@@ -68,6 +68,10 @@ pub fn append_prior_rays(
 }
 
 #[cfg(test)]
+#[path = "solid_prior_field_tests.rs"]
+mod field_tests;
+
+#[cfg(test)]
 mod tests {
     use nalgebra::{Isometry3, Vector3};
 

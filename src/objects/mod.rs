@@ -9,3 +9,5 @@ pub mod keyframes;
 pub mod object_bounds;
 pub mod object_view;
 pub mod observed_cloud;
+#[cfg(test)]
+pub(crate) mod view_fixtures;
