@@ -53,8 +53,12 @@ pub const SUPPORT_GAP_M: f32 = 0.01;
 /// The span, as a share of a cell's edge, of the draws around a seen-free cell's centre.
 pub const FREE_DRAW_SPREAD: f32 = 0.5;
 
-/// Draws around a seen-free cell's centre before the centre itself is taken.
+/// Draws around a seen-free or open cell's centre before the centre itself is taken.
 pub const FREE_DRAW_TRIES: usize = 4;
+
+/// How far from the object's surface, as a view sees it, a free draw must lie, metres of camera
+/// depth.
+pub const FREE_CLEARANCE_M: f32 = 0.03;
 
 /// Which hidden cells the solid prior asks to be solid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -185,28 +189,36 @@ impl HiddenSpace {
 
     /// A point drawn near a cell seen free or an open cell (world frame, one cell drawn uniformly
     /// from both), `None` when there is none: in the span [`FREE_DRAW_SPREAD`] × the cell's edges
-    /// around its centre, checked against `views`. A view saw a seen-free cell's centre free, by
-    /// the cell's half diagonal before the surface on the centre's pixel; the span's other points
-    /// lie on other pixels, which may see something nearer (a lamp's 2.6 cm pole beside a cell
-    /// 2.75 cm wide): a point around a seen-free centre is kept only when a view sees it free by
-    /// [`GLIMPSE_MARGIN_M`]. No view saw into an open cell: a point around its centre is kept
-    /// unless a view sees the object's surface within [`GLIMPSE_MARGIN_M`] of it (the pole under
-    /// a lamp's shade). After [`FREE_DRAW_TRIES`] misses the centre itself is taken.
+    /// around its centre, checked against `views`. No point is kept that a view sees within
+    /// [`FREE_CLEARANCE_M`] of the object's surface: the keyframe rays' surface samples teach the
+    /// surface, and free draws packed around a lamp's 2.6 cm pole (the cells beside it are seen
+    /// free) outweigh the few rays that hit it. A view saw a seen-free cell's centre free, by the
+    /// cell's half diagonal before the surface on the centre's pixel; the span's other points lie
+    /// on other pixels, which may see something nearer: a point around a seen-free centre is kept
+    /// only when a view also sees it free by [`GLIMPSE_MARGIN_M`]. No view saw into an open cell.
+    /// After [`FREE_DRAW_TRIES`] misses the centre itself is taken.
     pub fn draw_free(&self, views: &[&ObjectView], rng: &mut impl Rng) -> Option<Point3<f32>> {
         let (seen, open) = (self.free_centres.len(), self.open_centres.len());
         if seen + open == 0 {
             return None;
         }
         let pick = rng.random_range(0..seen + open);
-        let (centre, wanted, kept_if_seen) = if pick < seen {
-            (self.free_centres[pick], ViewEvidence::Free, true)
+        let (centre, seen_cell) = if pick < seen {
+            (self.free_centres[pick], true)
         } else {
-            (self.open_centres[pick - seen], ViewEvidence::AtObjectSurface, false)
+            (self.open_centres[pick - seen], false)
         };
         for _ in 0..FREE_DRAW_TRIES {
             let p = self.around(centre, FREE_DRAW_SPREAD, rng);
-            let seen_so = views.iter().any(|v| view_evidence(v, &p, GLIMPSE_MARGIN_M) == wanted);
-            if seen_so == kept_if_seen {
+            let near_surface = views
+                .iter()
+                .any(|v| view_evidence(v, &p, FREE_CLEARANCE_M) == ViewEvidence::AtObjectSurface);
+            let seen_free = || {
+                views
+                    .iter()
+                    .any(|v| view_evidence(v, &p, GLIMPSE_MARGIN_M) == ViewEvidence::Free)
+            };
+            if !near_surface && (!seen_cell || seen_free()) {
                 return Some(p);
             }
         }
