@@ -25,32 +25,39 @@ fn a_class_is_due_when_new_when_its_members_change_or_a_cloud_grows() {
     );
 }
 
-/// Two copies of one chair design and a table, each a partial, noisy view.
-fn three_members() -> Vec<MemberInput> {
+/// Members drawn as partial, noisy views of `(id, design, seed)`, ranked by id (the lowest
+/// first).
+fn members_of(drawn: &[(u32, crate::synth::Design, u64)]) -> Vec<MemberInput> {
     use crate::geometry::oriented_box::fit_minimum_volume_box;
-    use crate::synth::{Design, RegistrationTrial, RegistrationTrialSpec};
+    use crate::synth::{RegistrationTrial, RegistrationTrialSpec};
     let spec = RegistrationTrialSpec {
         outlier_fraction: 0.0,
         visible: (0.7, 0.8),
         ..RegistrationTrialSpec::default()
     };
-    [
+    drawn
+        .iter()
+        .map(|&(id, design, seed)| {
+            let trial = RegistrationTrial::draw(design, &spec, seed).unwrap();
+            MemberInput {
+                id: ObjectId(id),
+                bounds: fit_minimum_volume_box(&trial.source).unwrap(),
+                cloud: trial.source,
+                cloud_version: 1,
+                reliable_rays: 10 - id as usize,
+            }
+        })
+        .collect()
+}
+
+/// Two copies of one chair design and a table, each a partial, noisy view.
+fn three_members() -> Vec<MemberInput> {
+    use crate::synth::Design;
+    members_of(&[
         (1, Design::LadderBackChair, 1),
         (2, Design::LadderBackChair, 2),
         (3, Design::DiningTable, 3),
-    ]
-    .into_iter()
-    .map(|(id, design, seed)| {
-        let trial = RegistrationTrial::draw(design, &spec, seed).unwrap();
-        MemberInput {
-            id: ObjectId(id),
-            bounds: fit_minimum_volume_box(&trial.source).unwrap(),
-            cloud: trial.source,
-            cloud_version: 1,
-            reliable_rays: 10 - id as usize,
-        }
-    })
-    .collect()
+    ])
 }
 
 /// The same members after their clouds changed (new versions of the same points), so that no
@@ -278,34 +285,16 @@ fn a_reused_pair_keeps_its_alignment_until_a_cloud_grows() {
 #[test]
 fn the_best_explanation_pass_keeps_its_own_pairs_until_a_cloud_grows_by_the_growth() {
     use crate::categories::subcategories::SubcategoryAssignment;
-    use crate::geometry::oriented_box::fit_minimum_volume_box;
-    use crate::synth::{Design, RegistrationTrial, RegistrationTrialSpec};
+    use crate::synth::Design;
     // Two chairs and two tables, the chairs ranked first: the greedy pass groups the chairs
     // under chair 1 and the tables under table 3; the best pass asks chair 2 about table 3,
     // which the greedy pass never did.
-    let spec = RegistrationTrialSpec {
-        outlier_fraction: 0.0,
-        visible: (0.7, 0.8),
-        ..RegistrationTrialSpec::default()
-    };
-    let members: Vec<MemberInput> = [
+    let members = members_of(&[
         (1, Design::LadderBackChair, 1),
         (2, Design::LadderBackChair, 2),
         (3, Design::DiningTable, 3),
         (4, Design::DiningTable, 4),
-    ]
-    .into_iter()
-    .map(|(id, design, seed)| {
-        let trial = RegistrationTrial::draw(design, &spec, seed).unwrap();
-        MemberInput {
-            id: ObjectId(id),
-            bounds: fit_minimum_volume_box(&trial.source).unwrap(),
-            cloud: trial.source,
-            cloud_version: 1,
-            reliable_rays: 10 - id as usize,
-        }
-    })
-    .collect();
+    ]);
     let mut cfg = starting(RegistrationStart::Search);
     cfg.subcategories.assignment = Some(SubcategoryAssignment::Best);
     let first = register_class(&members, &first_time(), &cfg, 7).unwrap();
