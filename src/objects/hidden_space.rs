@@ -301,3 +301,7 @@ impl HiddenSpaceCache {
 #[cfg(test)]
 #[path = "hidden_space_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "hidden_space_draw_tests.rs"]
+mod draw_tests;

@@ -107,3 +107,12 @@ pub(crate) fn bed_views(scene: &[Solid]) -> [ObjectView; 3] {
         render_pitched([-2.6, 2.0, 1.4], half_pi, -0.5, scene),
     ]
 }
+
+/// The object: a slab 5 cm thick facing −y at y = 1 (its front), in a box 40 cm deep behind it.
+pub(crate) fn slab_and_box() -> (Vec<Solid>, OrientedBox) {
+    let slab = Solid {
+        aabb: aabb([-0.2, 1.0, 0.0], [0.2, 1.05, 0.4]),
+        is_object: true,
+    };
+    (vec![slab], aabb([-0.2, 1.0, 0.0], [0.2, 1.4, 0.4]))
+}

@@ -144,6 +144,15 @@ impl<'a> ClassClouds<'a> {
 }
 
 impl ClassClouds<'_> {
+    /// The pair's cloud sizes today.
+    fn points_now(&self, source: ObjectId, template: ObjectId) -> PairPoints {
+        let size = |id| self.sizes.get(&id).copied().unwrap_or(0);
+        PairPoints {
+            source: size(source),
+            template: size(template),
+        }
+    }
+
     /// The pair's stored alignment, rescored on today's clouds, when neither cloud grew by more
     /// than `growth` since it was found (on nearly the same clouds the search would find the same
     /// alignment); `None` otherwise.
@@ -173,11 +182,7 @@ impl PairRegistration for ClassClouds<'_> {
             return Ok(answer);
         }
         let (s, t) = (self.cloud(source)?, self.cloud(template)?);
-        let size = |id| self.sizes.get(&id).copied().unwrap_or(0);
-        let now = PairPoints {
-            source: size(source),
-            template: size(template),
-        };
+        let now = self.points_now(source, template);
         if let Some(cached) = self
             .cache
             .unchanged(source, template, self.versions_of(source, template))
@@ -220,11 +225,7 @@ impl PairRegistration for ClassClouds<'_> {
         if let Some(answer) = self.answered_now(source, template) {
             return Ok(answer);
         }
-        let size = |id| self.sizes.get(&id).copied().unwrap_or(0);
-        let now = PairPoints {
-            source: size(source),
-            template: size(template),
-        };
+        let now = self.points_now(source, template);
         if self
             .cache
             .unchanged(source, template, self.versions_of(source, template))
