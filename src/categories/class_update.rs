@@ -15,13 +15,16 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::class_registration::{CategoryConfig, ClassRegistration, MemberInput, class_is_due, register_class};
-use super::uncertainty::{ObjectReliability, UncertaintyStamp, object_reliability};
+use super::uncertainty::{ObjectReliability, UncertaintyStamp, UnobservedSpace, object_reliability, sphere_rays};
 use crate::error::Result;
 use crate::field::FieldBatch;
 use crate::geometry::mesh::Aabb;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::ids::{ClassId, ObjectId};
+use crate::objects::keyframes::KeyframeWindow;
+use crate::objects::object_view::ObjectView;
 use crate::objects::observed_cloud::ObservedCloud;
+use crate::objects::observed_space::ObservedSpace;
 use crate::rng::{RngStream, class_registration_seed, seeded_rng};
 
 /// An object's uncertainty sphere as its class's latest registration used it, and what it was
@@ -58,6 +61,8 @@ pub struct ClassMember<'a> {
     pub field: MemberField,
     /// Its sphere from an earlier registration, if one was evaluated.
     pub stored: Option<&'a MemberReliability>,
+    /// Its keyframe crops (what its views observed), if known.
+    pub keyframes: Option<&'a KeyframeWindow<ObjectView>>,
 }
 
 impl ClassMember<'_> {
@@ -191,13 +196,22 @@ fn member_reliability(
     // A fresh generator of the object's field stream (the draws the field's initial weights
     // started from; the two uses are independent of each other).
     let mut rng = seeded_rng(seed, RngStream::ObjectField(member.id));
-    let sphere = object_reliability(
-        &aabb.center(),
-        &(aabb.extent() * 0.5),
-        &cfg.uncertainty,
-        &mut rng,
-        |points| field.eval_alpha_world(&member.field.origin, points),
-    );
+    let (centre, half_extents) = (aabb.center(), aabb.extent() * 0.5);
+    let observed = match (cfg.uncertainty.unobserved, member.keyframes) {
+        (UnobservedSpace::Unknown, Some(keyframes)) => {
+            let views: Vec<&ObjectView> = keyframes.slots().iter().map(|s| &s.data).collect();
+            let radius = sphere_rays(&centre, &half_extents, &cfg.uncertainty).radius;
+            Some(ObservedSpace::of_views(&views, &centre, radius))
+        }
+        _ => None,
+    };
+    let sphere = object_reliability(&centre, &half_extents, &cfg.uncertainty, &mut rng, |points| {
+        let alpha = field.eval_alpha_world(&member.field.origin, points);
+        match &observed {
+            Some(space) => space.unknown_where_unobserved(points, alpha),
+            None => alpha,
+        }
+    });
     Some(MemberReliability { sphere, stamp })
 }
 
@@ -227,6 +241,7 @@ mod tests {
                 steps,
             },
             stored: None,
+            keyframes: None,
         })
     }
 

@@ -45,6 +45,22 @@ pub struct UncertaintyConfig {
     pub high: (f32, f32),
     /// A ray is reliable when 1 − g(u) is below this.
     pub reliable_below: f32,
+    /// What the sphere reads in space no view of the object observed
+    /// ([`crate::objects::observed_space`]).
+    pub unobserved: UnobservedSpace,
+}
+
+/// What the uncertainty sphere reads in space no view of the object observed (behind its
+/// surface or another's in every view that says anything of it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum UnobservedSpace {
+    /// The field's occupancy, as everywhere (the paper): a field extrapolates an object's
+    /// interior into its never-seen side as a confident solid, which reads as certain.
+    #[default]
+    Field,
+    /// Occupancy ½: rays into the never-seen side read as uncertain.
+    Unknown,
 }
 
 impl Default for UncertaintyConfig {
@@ -60,6 +76,7 @@ impl Default for UncertaintyConfig {
             low: (0.1, 0.15),
             high: (0.57, 0.65),
             reliable_below: 0.5,
+            unobserved: UnobservedSpace::Field,
         }
     }
 }

@@ -39,6 +39,11 @@ impl MapperConfig {
     /// their class.
     pub const PRIOR_RAYS: usize = 8;
 
+    /// Mirrored rays per step of the `fast` schedule's object sampler
+    /// (`fields.object_rays.mirror_rays` unset), for objects alone in their class whose cloud has
+    /// a vertical mirror plane.
+    pub const MIRROR_RAYS: usize = 24;
+
     /// The schedule that applies: `schedule.policy`, except that the offline protocol is the
     /// paper's fixed one (its classes are registered on the finished per-object fields).
     pub fn training_policy(&self) -> SchedulePolicy {
@@ -50,17 +55,19 @@ impl MapperConfig {
     }
 
     /// The object sampler the run uses: `fields.object_rays`, its unset `box_free_samples` and
-    /// prior ray counts set by the schedule — [`Self::CARVING_SAMPLES`] and [`Self::PRIOR_RAYS`]
-    /// under `fast`, none (vMAP's sampler, no priors) under `paper`.
+    /// prior and mirrored ray counts set by the schedule — [`Self::CARVING_SAMPLES`],
+    /// [`Self::PRIOR_RAYS`] and [`Self::MIRROR_RAYS`] under `fast`, none (vMAP's sampler, no
+    /// priors) under `paper`.
     pub fn object_rays(&self) -> RaySamplerConfig {
-        let (carving, priors) = match self.training_policy() {
-            SchedulePolicy::Fast => (Self::CARVING_SAMPLES, Self::PRIOR_RAYS),
-            SchedulePolicy::Paper => (0, 0),
+        let (carving, priors, mirror) = match self.training_policy() {
+            SchedulePolicy::Fast => (Self::CARVING_SAMPLES, Self::PRIOR_RAYS, Self::MIRROR_RAYS),
+            SchedulePolicy::Paper => (0, 0, 0),
         };
         self.fields
             .object_rays
             .with_default_carving(carving)
             .with_default_priors(priors, priors)
+            .with_default_mirror_rays(mirror)
     }
 
     /// The class registration the run uses: `categories`, its unset subcategory assignment set

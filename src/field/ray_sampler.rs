@@ -25,7 +25,9 @@ use serde::{Deserialize, Serialize};
 use super::free_space::{CarveCounts, carving_interval, ray_box_interval};
 use super::samples::RaySamples;
 use super::solid_prior::{PriorRays, append_prior_rays};
+use crate::geometry::mirror_symmetry::MirrorPlane;
 use crate::geometry::oriented_box::OrientedBox;
+use crate::objects::cell_evidence::{GLIMPSE_MARGIN_M, ViewEvidence, view_evidence};
 use crate::objects::hidden_space::{CellRules, FreeCells, HiddenCells, HiddenSpaceCache};
 use crate::objects::keyframes::KeyframeWindow;
 use crate::objects::object_view::{ObjectView, PixelState};
@@ -64,6 +66,12 @@ pub struct RaySamplerConfig {
     pub seen_free_rays: Option<usize>,
     /// Which cells the seen-free prior draws from.
     pub free_cells: FreeCells,
+    /// Mirrored rays per step for an object with a vertical mirror plane: keyframe rays drawn
+    /// as above and reflected across the plane, as if a camera on the other side had seen the
+    /// mirror image (a sofa seen from one end learns the other end's shape and the free space
+    /// past it). A ray of the object's pixel whose reflected surface point a view saw free is
+    /// dropped. `None`: the schedule's choice ([`RaySamplerConfig::mirror_rays`]); 0: none.
+    pub mirror_rays: Option<usize>,
     /// Weight of the priors' loss (mean over their samples of −ln o, or −ln(1 − o) under the box).
     pub hidden_solid_weight: f32,
 }
@@ -90,6 +98,7 @@ impl RaySamplerConfig {
         below_support_rays: 0,
         seen_free_rays: None,
         free_cells: FreeCells::SeenAndOpen,
+        mirror_rays: None,
         hidden_solid_weight: 1.0,
     };
 
@@ -107,6 +116,7 @@ impl RaySamplerConfig {
         below_support_rays: 0,
         seen_free_rays: None,
         free_cells: FreeCells::SeenAndOpen,
+        mirror_rays: None,
         hidden_solid_weight: 1.0,
     };
 
@@ -136,6 +146,17 @@ impl RaySamplerConfig {
     /// The seen-free prior's rays per step (unset: none, as for the solid prior).
     pub fn seen_free_rays(&self) -> usize {
         self.seen_free_rays.unwrap_or(0)
+    }
+
+    /// The mirrored rays per step (unset: none, as for the solid prior).
+    pub fn mirror_rays(&self) -> usize {
+        self.mirror_rays.unwrap_or(0)
+    }
+
+    /// The same sampler with an unset mirrored ray count set to `rays`.
+    pub fn with_default_mirror_rays(mut self, rays: usize) -> Self {
+        self.mirror_rays.get_or_insert(rays);
+        self
     }
 
     /// The same sampler with unset prior ray counts set to `solid` and `seen_free`.
@@ -177,17 +198,25 @@ pub fn choose_step_views(len: usize, recent: &[usize], count: usize, rng: &mut i
 /// keyframes (its newest ones always take part; see [`sample_training_rays`]).
 /// With `hidden` (a cache and the box fitted to the object's observed cloud),
 /// `hidden_solid_rays` prior rays follow, drawn in the cells of that box no view saw into (the
-/// cache is brought up to date first).
+/// cache is brought up to date first), and with a `mirror` plane too, `mirror_rays` keyframe
+/// rays reflected across it.
 pub fn sample_window_rays(
     window: &KeyframeWindow<ObjectView>,
     field_origin: &Point3<f32>,
     object_box: Option<&OrientedBox>,
     hidden: Option<(&mut HiddenSpaceCache, &OrientedBox)>,
+    mirror: Option<&MirrorPlane>,
     cfg: &RaySamplerConfig,
     rng: &mut impl Rng,
 ) -> RaySamples {
     let views: Vec<&ObjectView> = window.slots().iter().map(|s| &s.data).collect();
-    let mut rays = sample_training_rays(&views, window.recent_slots(), field_origin, object_box, cfg, rng);
+    let recent = window.recent_slots();
+    let mut rays = sample_training_rays(&views, recent, field_origin, object_box, cfg, rng);
+    if let Some(plane) = mirror.filter(|_| hidden.is_some() && cfg.mirror_rays() > 0) {
+        let mirrored_cfg = cfg.with_rays_per_step(cfg.mirror_rays());
+        let mirrored = sample_rays(&views, recent, field_origin, None, &mirrored_cfg, Some(plane), rng);
+        rays = rays.followed_by(mirrored).with_colour_rays_first();
+    }
     let counts = PriorRays {
         hidden_solid: cfg.solid_prior_rays(),
         below_support: cfg.below_support_rays,
@@ -218,6 +247,21 @@ pub fn sample_training_rays(
     field_origin: &Point3<f32>,
     object_box: Option<&OrientedBox>,
     cfg: &RaySamplerConfig,
+    rng: &mut impl Rng,
+) -> RaySamples {
+    sample_rays(views, recent, field_origin, object_box, cfg, None, rng)
+}
+
+/// [`sample_training_rays`], each ray reflected across `reflect` when given (then a ray of the
+/// object's pixel whose reflected surface point a view saw free by [`GLIMPSE_MARGIN_M`] is
+/// dropped: the object is not symmetric there).
+fn sample_rays(
+    views: &[&ObjectView],
+    recent: &[usize],
+    field_origin: &Point3<f32>,
+    object_box: Option<&OrientedBox>,
+    cfg: &RaySamplerConfig,
+    reflect: Option<&MirrorPlane>,
     rng: &mut impl Rng,
 ) -> RaySamples {
     let chosen = choose_step_views(views.len(), recent, cfg.keyframes_per_step, rng);
@@ -261,6 +305,19 @@ pub fn sample_training_rays(
         };
         let state = view.states[i];
         let (camera, dir) = pixel_ray(view, u, row);
+        let (camera, dir) = match reflect {
+            Some(plane) => (plane.reflect(&camera), plane.reflect_vector(&dir)),
+            None => (camera, dir),
+        };
+        if reflect.is_some() && state.reads_colour() && depth > 0.0 {
+            let surface = camera + dir * depth;
+            if views
+                .iter()
+                .any(|v| view_evidence(v, &surface, GLIMPSE_MARGIN_M) == ViewEvidence::Free)
+            {
+                continue;
+            }
+        }
         let free_end = depth - cfg.surface_band_m;
         let crossing = object_box.and_then(|b| ray_box_interval(b, &camera, &dir));
         let carve = crossing

@@ -208,3 +208,66 @@ fn the_same_seed_draws_the_same_rays() {
     assert_eq!(draw(9), draw(9));
     assert_ne!(draw(9), draw(10));
 }
+
+/// The surface point of each ray of `rays` whose colour is read (its samples extended to the
+/// measured depth).
+fn surface_points(rays: &RaySamples) -> Vec<Point3<f32>> {
+    let s = rays.samples_per_ray;
+    (0..rays.num_rays())
+        .filter(|&r| rays.states[r].reads_colour())
+        .map(|r| {
+            let (p, z) = (&rays.points[r * s..(r + 1) * s], &rays.z[r * s..(r + 1) * s]);
+            let (a, b) = (Point3::from(p[0]), Point3::from(p[s - 1]));
+            let dir = (b - a) / (z[s - 1] - z[0]);
+            a + dir * (rays.depth_m[r] - z[0])
+        })
+        .collect()
+}
+
+#[test]
+fn mirrored_rays_see_the_mirror_image_unless_a_view_saw_it_free() {
+    use crate::objects::view_fixtures::{Solid, aabb, render};
+    // A slab at x ∈ [0.1, 0.4] facing −y at y = 1, mirrored across x = 0; a screen (another
+    // object) hides the mirror image from the camera in front.
+    let scene = [
+        Solid {
+            aabb: aabb([0.1, 1.0, 0.0], [0.4, 1.1, 0.4]),
+            is_object: true,
+        },
+        Solid {
+            aabb: aabb([-0.8, 0.5, -0.5], [0.0, 0.55, 1.0]),
+            is_object: false,
+        },
+    ];
+    let plane = MirrorPlane::vertical(0.0, 0.0);
+    let in_front = render([0.25, -1.0, 0.2], 0.0, &scene);
+    let cfg = RaySamplerConfig {
+        box_free_samples: Some(0),
+        ..RaySamplerConfig::OBJECT
+    }
+    .with_rays_per_step(4000);
+    let draw = |views: &[&ObjectView], seed| {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        sample_rays(views, &[0], &Point3::origin(), None, &cfg, Some(&plane), &mut rng)
+    };
+    let mirrored = draw(&[&in_front], 1);
+    mirrored.validate().expect("consistent rays");
+    let surfaces = surface_points(&mirrored);
+    assert!(surfaces.len() > 20, "{} mirrored rays of the slab", surfaces.len());
+    for p in &surfaces {
+        assert!(
+            (-0.401..=-0.099).contains(&p.x) && (0.999..=1.101).contains(&p.y),
+            "a mirrored surface point off the slab's mirror image: {p:?}"
+        );
+    }
+    // A view from behind sees through the mirror image to the screen: the slab is not symmetric
+    // about x = 0, and its mirrored rays are dropped; the others' are kept.
+    let through_the_image = render([-0.25, 2.5, 0.2], std::f32::consts::PI, &scene);
+    let checked = draw(&[&in_front, &through_the_image], 1);
+    assert!(
+        surface_points(&checked).is_empty(),
+        "{} kept",
+        surface_points(&checked).len()
+    );
+    assert!(checked.num_rays() > 0, "the rays of other pixels stay");
+}

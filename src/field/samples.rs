@@ -41,6 +41,18 @@ impl RaySamples {
         self.points.len()
     }
 
+    /// These rays, then `other`'s (same samples per ray; the carving counts and solid weight
+    /// stay these rays').
+    pub fn followed_by(mut self, other: RaySamples) -> Self {
+        debug_assert!(other.num_rays() == 0 || other.samples_per_ray == self.samples_per_ray);
+        self.points.extend(other.points);
+        self.z.extend(other.z);
+        self.depth_m.extend(other.depth_m);
+        self.rgb.extend(other.rgb);
+        self.states.extend(other.states);
+        self
+    }
+
     /// Checks that the arrays agree in length.
     pub fn validate(&self) -> Result<()> {
         let rays = self.num_rays();

@@ -2,5 +2,6 @@
 //! their PLY files.
 
 pub mod mesh;
+pub mod mirror_symmetry;
 pub mod nearest;
 pub mod oriented_box;

@@ -114,7 +114,7 @@ pub enum CellEvidence {
 
 /// What one view says of one point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum ViewEvidence {
+pub(crate) enum ViewEvidence {
     /// Before the measured surface.
     Free,
     /// At the object's surface.
@@ -131,7 +131,7 @@ pub(super) enum ViewEvidence {
 
 /// What `view` says of the point `p_world`, `margin_m` being how far from the measured surface
 /// a point must lie to be before or behind it.
-pub(super) fn view_evidence(view: &ObjectView, p_world: &Point3<f32>, margin_m: f32) -> ViewEvidence {
+pub(crate) fn view_evidence(view: &ObjectView, p_world: &Point3<f32>, margin_m: f32) -> ViewEvidence {
     let p_camera = view.world_from_camera.inverse_transform_point(p_world);
     let Some((x, y)) = view.intrinsics.project(&p_camera) else {
         return ViewEvidence::Nothing;

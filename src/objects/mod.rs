@@ -9,5 +9,6 @@ pub mod keyframes;
 pub mod object_bounds;
 pub mod object_view;
 pub mod observed_cloud;
+pub mod observed_space;
 #[cfg(test)]
 pub(crate) mod view_fixtures;

@@ -1,6 +1,7 @@
 //! When and how an object's oriented box is (re)fitted from its observed cloud.
 
 use crate::error::{CatmapError, Result};
+use crate::geometry::mirror_symmetry::{MirrorPlane, SymmetryConfig, find_vertical_mirror};
 use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box};
 use crate::objects::config::ObjectConfig;
 use crate::objects::observed_cloud::{ObservedCloud, voxel_downsample};
@@ -9,6 +10,32 @@ use rayon::prelude::*;
 
 /// Fewest cloud voxels an object needs before it gets a box.
 pub const MIN_POINTS_FOR_BOX: usize = 10;
+
+/// While streaming, an object's mirror plane is searched again when its cloud has grown by more
+/// than this fraction since the last search (at a box refit; every grown one when the stream
+/// ends). The search costs tens of milliseconds; the box is refitted every 10 %.
+pub const MIRROR_REFRESH_GROWTH: f32 = 0.5;
+
+/// An object's vertical mirror plane as last searched for in its thinned cloud
+/// ([`crate::geometry::mirror_symmetry`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MirrorFit {
+    /// The plane, if the cloud has one.
+    pub plane: Option<MirrorPlane>,
+    /// Cloud voxels at the search.
+    pub fitted_at_points: usize,
+}
+
+/// What a refit gives an object: its box, the cloud size it was fitted at, and its mirror plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FittedBounds {
+    /// The minimum-volume box (edges at least `min_extent_m`).
+    pub oriented_box: OrientedBox,
+    /// Cloud voxels when the box was fitted.
+    pub fitted_at_points: usize,
+    /// The mirror plane: searched again at this refit, or the last one kept.
+    pub mirror: MirrorFit,
+}
 
 /// Whether a box fitted at `fitted_at` voxels is stale now that the cloud has `current` voxels.
 pub fn box_is_stale(fitted_at: Option<usize>, current: usize, growth: f32) -> bool {
@@ -19,32 +46,44 @@ pub fn box_is_stale(fitted_at: Option<usize>, current: usize, growth: f32) -> bo
 }
 
 /// Refits the boxes gone stale (see [`box_is_stale`]) among `objects` — each a key, the cloud
-/// size its box was fitted at (`None`: no box yet) and its cloud — in parallel. Growth is
-/// `bounds_refresh_growth` while streaming and 0 once the stream has ended (every grown box is
-/// refitted). Returns, in input order, each stale object's key and its new box with the cloud
-/// size it was fitted at, or why it has none yet.
+/// size its box was fitted at (`None`: no box yet), its last mirror plane and its cloud — in
+/// parallel. Growth is `bounds_refresh_growth` while streaming and 0 once the stream has ended
+/// (every grown box is refitted). A refitted object's mirror plane is searched again when its
+/// cloud has grown by [`MIRROR_REFRESH_GROWTH`] since the last search (0 once the stream has
+/// ended). Returns, in input order, each stale object's key and its new bounds, or why it has
+/// none yet.
 pub fn refit_stale_boxes<'a, K: Send>(
-    objects: impl IntoIterator<Item = (K, Option<usize>, &'a ObservedCloud)>,
+    objects: impl IntoIterator<Item = (K, Option<usize>, Option<MirrorFit>, &'a ObservedCloud)>,
     phase: StreamPhase,
     cfg: &ObjectConfig,
-) -> Vec<(K, Result<(OrientedBox, usize)>)> {
-    let growth = match phase {
-        StreamPhase::Streaming => cfg.bounds_refresh_growth,
-        StreamPhase::Ended => 0.0,
+) -> Vec<(K, Result<FittedBounds>)> {
+    let (growth, mirror_growth) = match phase {
+        StreamPhase::Streaming => (cfg.bounds_refresh_growth, MIRROR_REFRESH_GROWTH),
+        StreamPhase::Ended => (0.0, 0.0),
     };
-    let stale: Vec<(K, &ObservedCloud)> = objects
+    let stale: Vec<(K, Option<MirrorFit>, &ObservedCloud)> = objects
         .into_iter()
-        .filter(|(_, fitted_at, cloud)| box_is_stale(*fitted_at, cloud.len(), growth))
-        .map(|(key, _, cloud)| (key, cloud))
+        .filter(|(_, fitted_at, _, cloud)| box_is_stale(*fitted_at, cloud.len(), growth))
+        .map(|(key, _, mirror, cloud)| (key, mirror, cloud))
         .collect();
     stale
         .into_par_iter()
-        .map(|(key, cloud)| (key, fit_object_box(cloud, cfg).map(|b| (b, cloud.len()))))
+        .map(|(key, mirror, cloud)| {
+            let search = mirror.is_none_or(|m| box_is_stale(Some(m.fitted_at_points), cloud.len(), mirror_growth));
+            let previous = mirror.filter(|_| !search);
+            (key, fit_object_bounds(cloud, previous, cfg))
+        })
         .collect()
 }
 
 /// The minimum-volume box of the cloud, thinned to `bounds_voxel_m`, every edge ≥ `min_extent_m`.
 pub fn fit_object_box(cloud: &ObservedCloud, cfg: &ObjectConfig) -> Result<OrientedBox> {
+    Ok(fit_object_bounds(cloud, None, cfg)?.oriented_box)
+}
+
+/// The box of [`fit_object_box`] and the mirror plane of the same thinned cloud — searched
+/// for unless `mirror` is given, which is kept.
+pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: Option<MirrorFit>, cfg: &ObjectConfig) -> Result<FittedBounds> {
     if cloud.len() < MIN_POINTS_FOR_BOX {
         return Err(CatmapError::Degenerate(format!(
             "{} observed points, at least {MIN_POINTS_FOR_BOX} needed for a box",
@@ -52,7 +91,16 @@ pub fn fit_object_box(cloud: &ObservedCloud, cfg: &ObjectConfig) -> Result<Orien
         )));
     }
     let thinned = voxel_downsample(&cloud.points(), cfg.bounds_voxel_m);
-    Ok(fit_minimum_volume_box(&thinned)?.with_min_extent(cfg.min_extent_m))
+    let oriented_box = fit_minimum_volume_box(&thinned)?.with_min_extent(cfg.min_extent_m);
+    let mirror = mirror.unwrap_or_else(|| MirrorFit {
+        plane: find_vertical_mirror(&thinned, &SymmetryConfig::default()).map(|f| f.plane),
+        fitted_at_points: cloud.len(),
+    });
+    Ok(FittedBounds {
+        oriented_box,
+        fitted_at_points: cloud.len(),
+        mirror,
+    })
 }
 
 #[cfg(test)]
@@ -93,24 +141,70 @@ mod tests {
         let cfg = ObjectConfig::default();
         let objects = || {
             [
-                ("new", None, &cloud),
-                ("fresh", Some(n), &cloud),
-                ("grown", Some(n - 1), &cloud),
+                ("new", None, None, &cloud),
+                ("fresh", Some(n), None, &cloud),
+                ("grown", Some(n - 1), None, &cloud),
             ]
         };
         let streaming = refit_stale_boxes(objects(), StreamPhase::Streaming, &cfg);
         let keys: Vec<&str> = streaming.iter().map(|(k, _)| *k).collect();
         assert_eq!(keys, vec!["new"], "one more point is less than the growth");
-        let (fitted, at) = streaming[0].1.as_ref().expect("enough points");
+        let fitted = streaming[0].1.as_ref().expect("enough points");
         assert_eq!(
-            (*fitted, *at),
+            (fitted.oriented_box, fitted.fitted_at_points),
             (fit_object_box(&cloud, &cfg).expect("enough points"), n)
         );
         let ended = refit_stale_boxes(objects(), StreamPhase::Ended, &cfg);
         let keys: Vec<&str> = ended.iter().map(|(k, _)| *k).collect();
         assert_eq!(keys, vec!["new", "grown"]);
         let few = ObservedCloud::new(0.01);
-        let none = refit_stale_boxes([("empty", Some(0), &few)], StreamPhase::Ended, &cfg);
+        let none = refit_stale_boxes([("empty", Some(0), None, &few)], StreamPhase::Ended, &cfg);
         assert!(none.is_empty(), "a cloud that did not grow keeps its box");
+    }
+
+    #[test]
+    fn the_mirror_plane_is_searched_again_only_after_its_own_growth_and_at_the_end() {
+        // Two posts 0.6 m apart: mirror-symmetric about x = 0.3.
+        let mut cloud = ObservedCloud::new(0.01);
+        for x in [0.0, 0.6] {
+            for k in 0..60 {
+                for a in 0..8 {
+                    let t = a as f32 * std::f32::consts::TAU / 8.0;
+                    cloud.add_point(&Point3::new(x + 0.04 * t.cos(), 0.04 * t.sin(), k as f32 * 0.02));
+                }
+            }
+        }
+        let n = cloud.len();
+        let cfg = ObjectConfig::default();
+        let fitted = fit_object_bounds(&cloud, None, &cfg).expect("enough points");
+        let plane = fitted.mirror.plane.expect("two posts are symmetric");
+        assert!(
+            plane.normal.x.abs() > 0.999 && (plane.distance(&Point3::new(0.3, 0.0, 0.0))).abs() < 0.01,
+            "{plane:?}"
+        );
+        // A remembered search (here: none found) is kept while the cloud grew by less than the
+        // growth, though the box is refitted.
+        let remembered = MirrorFit {
+            plane: None,
+            fitted_at_points: (n as f32 / (1.0 + MIRROR_REFRESH_GROWTH)) as usize + 1,
+        };
+        let streaming = refit_stale_boxes([("a", Some(1), Some(remembered), &cloud)], StreamPhase::Streaming, &cfg);
+        assert_eq!(streaming[0].1.as_ref().expect("fitted").mirror, remembered);
+        let ended = refit_stale_boxes([("a", Some(1), Some(remembered), &cloud)], StreamPhase::Ended, &cfg);
+        assert_eq!(
+            ended[0].1.as_ref().expect("fitted").mirror,
+            fitted.mirror,
+            "searched again at the end"
+        );
+        let older = MirrorFit {
+            fitted_at_points: remembered.fitted_at_points - 2,
+            ..remembered
+        };
+        let grown = refit_stale_boxes([("a", Some(1), Some(older), &cloud)], StreamPhase::Streaming, &cfg);
+        assert_eq!(
+            grown[0].1.as_ref().expect("fitted").mirror,
+            fitted.mirror,
+            "grown past the growth"
+        );
     }
 }

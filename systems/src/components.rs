@@ -6,6 +6,7 @@ use bevy_ecs::prelude::*;
 use catmap::geometry::oriented_box::OrientedBox;
 use catmap::objects::frame_observation::FrameObservation;
 use catmap::objects::keyframes::KeyframeWindow;
+use catmap::objects::object_bounds::MirrorFit;
 use catmap::objects::object_view::ObjectView;
 use catmap::objects::observed_cloud::ObservedCloud;
 use catmap::sensor::pixel_box::PixelBox;
@@ -98,6 +99,9 @@ pub struct ObjectBounds {
     pub oriented_box: OrientedBox,
     /// Cloud voxels when the box was fitted.
     pub fitted_at_points: usize,
+    /// The vertical mirror plane of the cloud, as last searched for.
+    #[serde(default)]
+    pub mirror: Option<MirrorFit>,
 }
 
 /// The object's own random generator, seeded from `(config.seed, object id)`.

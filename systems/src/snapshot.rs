@@ -35,6 +35,9 @@ pub struct ObjectSnapshot {
     pub points: Vec<Point3<f32>>,
     /// The oriented box, once the cloud is large enough.
     pub bounds: Option<OrientedBox>,
+    /// The cloud's vertical mirror plane, if one was found.
+    #[serde(default)]
+    pub mirror_plane: Option<catmap::geometry::mirror_symmetry::MirrorPlane>,
 }
 
 /// The background as the mapper knows it.
@@ -99,6 +102,7 @@ impl MapSnapshot {
                     cloud_points: cloud.0.len(),
                     points: cloud.0.points(),
                     bounds: bounds.map(|b| b.oriented_box),
+                    mirror_plane: bounds.and_then(|b| b.mirror?.plane),
                 },
             )
             .collect();

@@ -34,6 +34,11 @@ pub struct ObjectRow {
     /// cloud was too small to fit one.
     #[serde(default)]
     pub bounds: Option<catmap::geometry::oriented_box::OrientedBox>,
+    /// The observed cloud's vertical mirror plane `normal · p = offset` (world, metres), if one
+    /// was found: an object alone in its class with a plane trains on mirrored rays too
+    /// (`fields.object_rays.mirror_rays`).
+    #[serde(default)]
+    pub mirror_plane: Option<catmap::geometry::mirror_symmetry::MirrorPlane>,
 }
 
 /// What a run did and how long each stage took.
@@ -154,6 +159,7 @@ impl RunSummary {
                 cloud_points: o.cloud_points,
                 box_extents_m: o.bounds.map(|b| b.extents().into()),
                 bounds: o.bounds,
+                mirror_plane: o.mirror_plane,
             })
             .collect();
         let mut objects_per_class = BTreeMap::new();
@@ -259,6 +265,7 @@ mod tests {
             cloud_points: 10,
             box_extents_m: None,
             bounds: None,
+            mirror_plane: None,
         }
     }
 

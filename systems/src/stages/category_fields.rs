@@ -119,6 +119,7 @@ fn sample_members(
                 &field_slot.origin,
                 Some(&meshing.meshed_box(&slot.0.nocs.oriented_box())),
                 None,
+                None,
                 &rays[slot.field],
                 &mut rng.0,
             ),

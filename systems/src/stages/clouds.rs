@@ -47,14 +47,21 @@ pub fn refresh_object_bounds(
     mut commands: Commands,
 ) {
     let _timer = times.start("bounds");
-    let clouds = objects
-        .iter()
-        .map(|(entity, object, cloud, bounds)| ((entity, object.id), bounds.map(|b| b.fitted_at_points), &cloud.0));
+    let clouds = objects.iter().map(|(entity, object, cloud, bounds)| {
+        let mirror = bounds.and_then(|b| b.mirror);
+        (
+            (entity, object.id),
+            bounds.map(|b| b.fitted_at_points),
+            mirror,
+            &cloud.0,
+        )
+    });
     for ((entity, id), fitted) in refit_stale_boxes(clouds, progress.phase(), &settings.0.objects) {
         let fitted = match fitted {
-            Ok((oriented_box, fitted_at_points)) => ObjectBounds {
-                oriented_box,
-                fitted_at_points,
+            Ok(fitted) => ObjectBounds {
+                oriented_box: fitted.oriented_box,
+                fitted_at_points: fitted.fitted_at_points,
+                mirror: Some(fitted.mirror),
             },
             Err(e) => {
                 tracing::warn!(object = %id, error = %e, "cannot fit an oriented box yet");

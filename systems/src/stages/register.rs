@@ -10,7 +10,7 @@ use catmap::categories::class_update::{
 use catmap::{ClassId, ObjectId};
 
 use crate::components::{
-    Category, FieldLoss, FieldSlot, Membership, ObjectBounds, ObjectCloud, Reliability, Subcategories,
+    Category, FieldLoss, FieldSlot, Keyframes, Membership, ObjectBounds, ObjectCloud, Reliability, Subcategories,
 };
 use crate::resources::{Fields, ObjectIndex, Settings, StageTimes};
 
@@ -21,6 +21,7 @@ type MemberParts = (
     &'static FieldSlot,
     &'static FieldLoss,
     Option<&'static Reliability>,
+    &'static Keyframes,
 );
 
 /// Re-registers every class that is due (classes in id order) and writes its subcategories, its
@@ -90,7 +91,7 @@ fn due_class<'a>(
 
 /// Member `id` as registration reads it: `None` until it has a box and a field.
 fn class_member<'a>(id: ObjectId, index: &ObjectIndex, objects: &'a Query<MemberParts>) -> Option<ClassMember<'a>> {
-    let (cloud, bounds, slot, loss, stored) = objects.get(*index.0.get(&id)?).ok()?;
+    let (cloud, bounds, slot, loss, stored, keyframes) = objects.get(*index.0.get(&id)?).ok()?;
     Some(ClassMember {
         id,
         cloud: &cloud.0,
@@ -101,6 +102,7 @@ fn class_member<'a>(id: ObjectId, index: &ObjectIndex, objects: &'a Query<Member
             steps: loss.steps,
         },
         stored: stored.map(|r| &r.0),
+        keyframes: Some(&keyframes.0),
     })
 }
 

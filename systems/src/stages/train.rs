@@ -183,7 +183,8 @@ fn train_one(
             let class_size = |o: &Object| class_sizes.get(&o.id).copied().unwrap_or(1);
             let priors = object.is_some_and(|o| takes_shape_priors(class_size(o)));
             let fitted_box = bounds.filter(|_| priors).map(|b| b.oriented_box);
-            (keyframes, slot, rng, loss, (object_box, fitted_box))
+            let mirror = bounds.filter(|_| priors).and_then(|b| b.mirror?.plane);
+            (keyframes, slot, rng, loss, (object_box, fitted_box, mirror))
         })
         .collect();
     work.sort_by_key(|(_, slot, ..)| slot.index);
@@ -208,13 +209,14 @@ fn train_one(
     let fields: Vec<RaySamples> = work
         .par_iter_mut()
         .zip(work_caches.par_iter_mut())
-        .map(|((keyframes, slot, rng, _, (object_box, fitted_box)), cache)| {
+        .map(|((keyframes, slot, rng, _, (object_box, fitted_box, mirror)), cache)| {
             let hidden = cache.as_deref_mut().zip(fitted_box.as_ref());
             sample_window_rays(
                 &keyframes.0,
                 &slot.origin,
                 object_box.as_ref(),
                 hidden,
+                mirror.as_ref(),
                 rays,
                 &mut rng.0,
             )

@@ -1,0 +1,261 @@
+//! A vertical mirror-symmetry plane of a point cloud: the plane, among all vertical ones, across
+//! which the most points land on another point of the cloud.
+//!
+//! Most furniture is mirror-symmetric about a vertical plane (a sofa, a bed, a chair, a lamp
+//! about any plane through its pole). A cloud seen from one side still shows it: the two arms of
+//! a sofa seen from the front, a chair's two front legs. The search scores a plane `n·p = d`
+//! (`n` horizontal) by the share of the points off the plane — farther than
+//! [`SymmetryConfig::min_off_plane_m`], so that a flat patch does not call its own plane a
+//! symmetry — whose reflection lies within [`SymmetryConfig::tolerance_m`] of a point of the
+//! cloud: first over a coarse grid of directions and offsets on a subset of the points, then
+//! finer around the best on all of them. A plane is kept only when that share reaches
+//! [`SymmetryConfig::min_matched`]: an asymmetric cloud gets none. A partly seen object's
+//! reflections that land in space no view saw are unmatched; whether they contradict what a
+//! view saw is the caller's question (`crate::objects::mirror_prior`).
+
+use nalgebra::{Point3, Vector3};
+
+/// A vertical plane `normal · p = offset` (world frame, z up).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MirrorPlane {
+    /// Unit horizontal normal.
+    pub normal: Vector3<f32>,
+    /// Signed distance of the plane from the origin along the normal, metres.
+    pub offset: f32,
+}
+
+impl MirrorPlane {
+    /// The vertical plane at angle `theta` (radians, from world x towards y) of its normal and
+    /// `offset` from the origin.
+    pub fn vertical(theta: f32, offset: f32) -> Self {
+        Self {
+            normal: Vector3::new(theta.cos(), theta.sin(), 0.0),
+            offset,
+        }
+    }
+
+    /// Signed distance of `p` from the plane.
+    pub fn distance(&self, p: &Point3<f32>) -> f32 {
+        self.normal.dot(&p.coords) - self.offset
+    }
+
+    /// The mirror image of point `p`.
+    pub fn reflect(&self, p: &Point3<f32>) -> Point3<f32> {
+        p - self.normal * (2.0 * self.distance(p))
+    }
+
+    /// The mirror image of direction `v`.
+    pub fn reflect_vector(&self, v: &Vector3<f32>) -> Vector3<f32> {
+        v - self.normal * (2.0 * self.normal.dot(v))
+    }
+
+    /// The angle between the two planes' normals, radians in [0, π/2] (a plane's normal and its
+    /// negation name the same plane).
+    pub fn angle_to(&self, other: &MirrorPlane) -> f32 {
+        self.normal.dot(&other.normal).abs().min(1.0).acos()
+    }
+}
+
+/// How the search runs and when a plane counts as found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SymmetryConfig {
+    /// How near another point a reflection must land to match, metres.
+    pub tolerance_m: f32,
+    /// Points nearer the plane than this are not scored, metres.
+    pub min_off_plane_m: f32,
+    /// Share of the scored points that must match for a plane to count.
+    pub min_matched: f32,
+    /// Fewest scored points a plane needs.
+    pub min_scored: usize,
+}
+
+impl Default for SymmetryConfig {
+    fn default() -> Self {
+        Self {
+            tolerance_m: 0.025,
+            min_off_plane_m: 0.04,
+            min_matched: 0.6,
+            min_scored: 40,
+        }
+    }
+}
+
+/// A plane the search found, with its score.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SymmetryFit {
+    /// The plane.
+    pub plane: MirrorPlane,
+    /// Share of the scored points whose reflection matched.
+    pub matched: f32,
+    /// Points scored (off the plane).
+    pub scored: usize,
+}
+
+/// Directions of the coarse search (over half a turn).
+const COARSE_DIRECTIONS: usize = 36;
+/// Offset step of the coarse search, metres.
+const COARSE_OFFSET_M: f32 = 0.02;
+/// Most points the coarse search scores (every k-th point of the cloud).
+const COARSE_POINTS: usize = 300;
+/// Most points the fine search scores.
+const FINE_POINTS: usize = 3000;
+/// Steps each side of the coarse best in the fine search, per parameter.
+const FINE_STEPS: i32 = 4;
+
+/// The best vertical mirror plane of `points` (world frame, z up), if its matched share reaches
+/// `cfg.min_matched`; see the module doc.
+pub fn find_vertical_mirror(points: &[Point3<f32>], cfg: &SymmetryConfig) -> Option<SymmetryFit> {
+    if points.len() < cfg.min_scored {
+        return None;
+    }
+    let cells = VoxelSet::new(points, cfg.tolerance_m);
+    let coarse = every_kth(points, COARSE_POINTS);
+    let fine = every_kth(points, FINE_POINTS);
+    let dtheta = std::f32::consts::PI / COARSE_DIRECTIONS as f32;
+    let mut best: Option<SymmetryFit> = None;
+    let consider = |fit: Option<SymmetryFit>, best: &mut Option<SymmetryFit>| {
+        if let Some(f) = fit
+            && best.is_none_or(|b| f.matched > b.matched)
+        {
+            *best = Some(f);
+        }
+    };
+    for t in 0..COARSE_DIRECTIONS {
+        let theta = t as f32 * dtheta;
+        let normal = Vector3::new(theta.cos(), theta.sin(), 0.0);
+        let (lo, hi) = coarse
+            .iter()
+            .map(|p| normal.dot(&p.coords))
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), s| (lo.min(s), hi.max(s)));
+        // A plane within a fifth of the extent from the cloud's end reflects most points out.
+        let margin = 0.2 * (hi - lo);
+        let steps = ((hi - lo - 2.0 * margin) / COARSE_OFFSET_M).ceil().max(0.0) as usize;
+        for k in 0..=steps {
+            let plane = MirrorPlane::vertical(theta, lo + margin + k as f32 * COARSE_OFFSET_M);
+            consider(score(&plane, &coarse, &cells, cfg), &mut best);
+        }
+    }
+    let coarse_best = best?;
+    let theta0 = coarse_best.plane.normal.y.atan2(coarse_best.plane.normal.x);
+    let mut best = None;
+    for a in -FINE_STEPS..=FINE_STEPS {
+        for b in -FINE_STEPS..=FINE_STEPS {
+            let theta = theta0 + a as f32 * dtheta / FINE_STEPS as f32;
+            let offset = coarse_best.plane.offset + b as f32 * COARSE_OFFSET_M / FINE_STEPS as f32;
+            consider(
+                score(&MirrorPlane::vertical(theta, offset), &fine, &cells, cfg),
+                &mut best,
+            );
+        }
+    }
+    best.filter(|f| f.matched >= cfg.min_matched)
+}
+
+/// The matched share of `plane` over `points` (`None` with fewer than `cfg.min_scored` scored).
+fn score(plane: &MirrorPlane, points: &[Point3<f32>], cells: &VoxelSet, cfg: &SymmetryConfig) -> Option<SymmetryFit> {
+    let (mut scored, mut matched) = (0usize, 0usize);
+    for p in points {
+        if plane.distance(p).abs() < cfg.min_off_plane_m {
+            continue;
+        }
+        scored += 1;
+        matched += usize::from(cells.near(&plane.reflect(p)));
+    }
+    (scored >= cfg.min_scored).then(|| SymmetryFit {
+        plane: *plane,
+        matched: matched as f32 / scored as f32,
+        scored,
+    })
+}
+
+/// At most `max` points of `points`, every k-th.
+fn every_kth(points: &[Point3<f32>], max: usize) -> Vec<Point3<f32>> {
+    let k = points.len().div_ceil(max.max(1)).max(1);
+    points.iter().step_by(k).copied().collect()
+}
+
+/// The points of a cloud in a dense grid of cells as large as the tolerance (cell lists stored
+/// back to back), answering "is there a point within the tolerance?".
+struct VoxelSet {
+    corner: Point3<f32>,
+    cell: f32,
+    dims: [usize; 3],
+    tolerance_sq: f32,
+    /// Where each cell's points start in `points` (one more entry than cells).
+    starts: Vec<u32>,
+    points: Vec<Point3<f32>>,
+}
+
+impl VoxelSet {
+    fn new(points: &[Point3<f32>], tolerance: f32) -> Self {
+        let lo = points
+            .iter()
+            .fold(Point3::from(Vector3::repeat(f32::INFINITY)), |a, p| a.inf(p));
+        let hi = points
+            .iter()
+            .fold(Point3::from(Vector3::repeat(f32::NEG_INFINITY)), |a, p| a.sup(p));
+        let corner = lo - Vector3::repeat(tolerance);
+        let dims = [0, 1, 2].map(|a| ((hi[a] - corner[a]) / tolerance).floor() as usize + 2);
+        let mut set = Self {
+            corner,
+            cell: tolerance,
+            dims,
+            tolerance_sq: tolerance * tolerance,
+            starts: vec![0; dims[0] * dims[1] * dims[2] + 1],
+            points: vec![Point3::origin(); points.len()],
+        };
+        let index: Vec<usize> = points.iter().map(|p| set.index(set.key(p).expect("inside"))).collect();
+        for &i in &index {
+            set.starts[i + 1] += 1;
+        }
+        for i in 1..set.starts.len() {
+            set.starts[i] += set.starts[i - 1];
+        }
+        let mut fill = set.starts.clone();
+        for (p, &i) in points.iter().zip(&index) {
+            set.points[fill[i] as usize] = *p;
+            fill[i] += 1;
+        }
+        set
+    }
+
+    /// The cell of `p`, if inside the grid.
+    fn key(&self, p: &Point3<f32>) -> Option<[usize; 3]> {
+        let mut key = [0; 3];
+        for a in 0..3 {
+            let k = ((p[a] - self.corner[a]) / self.cell).floor();
+            if !(0.0..self.dims[a] as f32).contains(&k) {
+                return None;
+            }
+            key[a] = k as usize;
+        }
+        Some(key)
+    }
+
+    fn index(&self, [x, y, z]: [usize; 3]) -> usize {
+        (z * self.dims[1] + y) * self.dims[0] + x
+    }
+
+    fn near(&self, p: &Point3<f32>) -> bool {
+        // A point within the tolerance of one inside the grid lies in the grid (its margin is
+        // the tolerance).
+        let Some([x, y, z]) = self.key(p) else {
+            return false;
+        };
+        let range = |k: usize, dim: usize| k.saturating_sub(1)..=(k + 1).min(dim - 1);
+        range(z, self.dims[2]).any(|k| {
+            range(y, self.dims[1]).any(|j| {
+                range(x, self.dims[0]).any(|i| {
+                    let c = self.index([i, j, k]);
+                    self.points[self.starts[c] as usize..self.starts[c + 1] as usize]
+                        .iter()
+                        .any(|q| (q - p).norm_squared() <= self.tolerance_sq)
+                })
+            })
+        })
+    }
+}
+
+#[cfg(test)]
+#[path = "mirror_symmetry_tests.rs"]
+mod tests;
