@@ -66,11 +66,12 @@ pub struct RaySamplerConfig {
     pub seen_free_rays: Option<usize>,
     /// Which cells the seen-free prior draws from.
     pub free_cells: FreeCells,
-    /// Mirrored rays per step for an object with a vertical mirror plane: keyframe rays drawn
-    /// as above and reflected across the plane, as if a camera on the other side had seen the
-    /// mirror image (a sofa seen from one end learns the other end's shape and the free space
-    /// past it). A ray of the object's pixel whose reflected surface point a view saw free is
-    /// dropped. `None`: the schedule's choice ([`RaySamplerConfig::mirror_rays`]); 0: none.
+    /// Mirrored pixel draws per step for an object with a vertical mirror plane: keyframe rays
+    /// drawn as above and reflected across the plane, as if a camera on the other side had seen
+    /// the mirror image (a sofa seen from one end learns the other end's shape and the free space
+    /// before it). Only rays of the object's own pixels are kept, and not those whose reflected
+    /// surface point a view saw free. `None`: the schedule's choice
+    /// ([`RaySamplerConfig::mirror_rays`]); 0: none.
     pub mirror_rays: Option<usize>,
     /// Weight of the priors' loss (mean over their samples of −ln o, or −ln(1 − o) under the box).
     pub hidden_solid_weight: f32,
@@ -252,9 +253,11 @@ pub fn sample_training_rays(
     sample_rays(views, recent, field_origin, object_box, cfg, None, rng)
 }
 
-/// [`sample_training_rays`], each ray reflected across `reflect` when given (then a ray of the
-/// object's pixel whose reflected surface point a view saw free by [`GLIMPSE_MARGIN_M`] is
-/// dropped: the object is not symmetric there).
+/// [`sample_training_rays`], each ray reflected across `reflect` when given. Then only rays of
+/// the object's pixels with valid depth are kept, and not those whose reflected surface point a
+/// view saw free by [`GLIMPSE_MARGIN_M`] (the object is not symmetric there): a reflected ray of
+/// another object's pixel asks for free space all the way to that object, and one that grazed the
+/// floor beside the object, reflected across a plane a degree off, cuts through its base.
 fn sample_rays(
     views: &[&ObjectView],
     recent: &[usize],
@@ -309,12 +312,13 @@ fn sample_rays(
             Some(plane) => (plane.reflect(&camera), plane.reflect_vector(&dir)),
             None => (camera, dir),
         };
-        if reflect.is_some() && state.reads_colour() && depth > 0.0 {
-            let surface = camera + dir * depth;
-            if views
-                .iter()
-                .any(|v| view_evidence(v, &surface, GLIMPSE_MARGIN_M) == ViewEvidence::Free)
-            {
+        if reflect.is_some() {
+            let seen_free = |p: &Point3<f32>| {
+                views
+                    .iter()
+                    .any(|v| view_evidence(v, p, GLIMPSE_MARGIN_M) == ViewEvidence::Free)
+            };
+            if !(state.reads_colour() && depth > 0.0) || seen_free(&(camera + dir * depth)) {
                 continue;
             }
         }

@@ -8,7 +8,10 @@
 //! [`SymmetryConfig::min_off_plane_m`], so that a flat patch does not call its own plane a
 //! symmetry — whose reflection lies within [`SymmetryConfig::tolerance_m`] of a point of the
 //! cloud: first over a coarse grid of directions and offsets on a subset of the points, then
-//! finer around the best on all of them. A plane is kept only when that share reaches
+//! twice finer around the best on all of them, where among the planes whose share is within 5 %
+//! of the best the one whose matched reflections land nearest their points wins (a share counted
+//! at a 2.5 cm tolerance is flat over a degree or two; a ray reflected across a plane off by 2°
+//! grazes the floor under the object). A plane is kept only when that share reaches
 //! [`SymmetryConfig::min_matched`]: an asymmetric cloud gets none. A partly seen object's
 //! reflections that land in space no view saw are unmatched; whether they contradict what a
 //! view saw is the caller's question (`crate::objects::mirror_prior`).
@@ -89,6 +92,8 @@ pub struct SymmetryFit {
     pub matched: f32,
     /// Points scored (off the plane).
     pub scored: usize,
+    /// Root mean square distance of the matched reflections to their nearest points, metres.
+    pub residual_m: f32,
 }
 
 /// Directions of the coarse search (over half a turn).
@@ -101,6 +106,8 @@ const COARSE_POINTS: usize = 300;
 const FINE_POINTS: usize = 3000;
 /// Steps each side of the coarse best in the fine search, per parameter.
 const FINE_STEPS: i32 = 4;
+/// Share of the best matched share a plane of the fine stages must keep to compete on nearness.
+const REFINE_KEEP: f32 = 0.95;
 
 /// The best vertical mirror plane of `points` (world frame, z up), if its matched share reaches
 /// `cfg.min_matched`; see the module doc.
@@ -136,35 +143,62 @@ pub fn find_vertical_mirror(points: &[Point3<f32>], cfg: &SymmetryConfig) -> Opt
         }
     }
     let coarse_best = best?;
-    let theta0 = coarse_best.plane.normal.y.atan2(coarse_best.plane.normal.x);
-    let mut best = None;
-    for a in -FINE_STEPS..=FINE_STEPS {
-        for b in -FINE_STEPS..=FINE_STEPS {
-            let theta = theta0 + a as f32 * dtheta / FINE_STEPS as f32;
-            let offset = coarse_best.plane.offset + b as f32 * COARSE_OFFSET_M / FINE_STEPS as f32;
-            consider(
-                score(&MirrorPlane::vertical(theta, offset), &fine, &cells, cfg),
-                &mut best,
-            );
-        }
-    }
-    best.filter(|f| f.matched >= cfg.min_matched)
+    let around = |centre: MirrorPlane, dtheta: f32, doffset: f32| {
+        let theta0 = centre.normal.y.atan2(centre.normal.x);
+        (-FINE_STEPS..=FINE_STEPS).flat_map(move |a| {
+            (-FINE_STEPS..=FINE_STEPS)
+                .map(move |b| MirrorPlane::vertical(theta0 + a as f32 * dtheta, centre.offset + b as f32 * doffset))
+        })
+    };
+    let step = FINE_STEPS as f32;
+    let fine_best = nearest_of_the_best(
+        around(coarse_best.plane, dtheta / step, COARSE_OFFSET_M / step),
+        &fine,
+        &cells,
+        cfg,
+    )?;
+    let (dtheta, doffset) = (dtheta / (step * step), COARSE_OFFSET_M / (step * step));
+    let refined = nearest_of_the_best(around(fine_best.plane, dtheta, doffset), &fine, &cells, cfg)?;
+    Some(refined).filter(|f| f.matched >= cfg.min_matched)
+}
+
+/// Among `planes`, those whose matched share is within [`REFINE_KEEP`] of the best, the one whose
+/// matched reflections land nearest their points.
+fn nearest_of_the_best(
+    planes: impl Iterator<Item = MirrorPlane>,
+    points: &[Point3<f32>],
+    cells: &VoxelSet,
+    cfg: &SymmetryConfig,
+) -> Option<SymmetryFit> {
+    let fits: Vec<SymmetryFit> = planes.filter_map(|p| score(&p, points, cells, cfg)).collect();
+    let best = fits.iter().map(|f| f.matched).fold(0.0f32, f32::max);
+    fits.into_iter()
+        .filter(|f| f.matched >= REFINE_KEEP * best)
+        .min_by(|a, b| a.residual_m.total_cmp(&b.residual_m))
 }
 
 /// The matched share of `plane` over `points` (`None` with fewer than `cfg.min_scored` scored).
 fn score(plane: &MirrorPlane, points: &[Point3<f32>], cells: &VoxelSet, cfg: &SymmetryConfig) -> Option<SymmetryFit> {
-    let (mut scored, mut matched) = (0usize, 0usize);
+    let (mut scored, mut matched, mut sum_sq) = (0usize, 0usize, 0f32);
     for p in points {
         if plane.distance(p).abs() < cfg.min_off_plane_m {
             continue;
         }
         scored += 1;
-        matched += usize::from(cells.near(&plane.reflect(p)));
+        if let Some(d_sq) = cells.nearest_sq(&plane.reflect(p)) {
+            matched += 1;
+            sum_sq += d_sq;
+        }
     }
     (scored >= cfg.min_scored).then(|| SymmetryFit {
         plane: *plane,
         matched: matched as f32 / scored as f32,
         scored,
+        residual_m: if matched == 0 {
+            f32::INFINITY
+        } else {
+            (sum_sq / matched as f32).sqrt()
+        },
     })
 }
 
@@ -236,23 +270,24 @@ impl VoxelSet {
         (z * self.dims[1] + y) * self.dims[0] + x
     }
 
-    fn near(&self, p: &Point3<f32>) -> bool {
+    /// The squared distance from `p` to its nearest point, if within the tolerance.
+    fn nearest_sq(&self, p: &Point3<f32>) -> Option<f32> {
         // A point within the tolerance of one inside the grid lies in the grid (its margin is
         // the tolerance).
-        let Some([x, y, z]) = self.key(p) else {
-            return false;
-        };
+        let [x, y, z] = self.key(p)?;
         let range = |k: usize, dim: usize| k.saturating_sub(1)..=(k + 1).min(dim - 1);
-        range(z, self.dims[2]).any(|k| {
-            range(y, self.dims[1]).any(|j| {
-                range(x, self.dims[0]).any(|i| {
+        let mut nearest = f32::INFINITY;
+        for k in range(z, self.dims[2]) {
+            for j in range(y, self.dims[1]) {
+                for i in range(x, self.dims[0]) {
                     let c = self.index([i, j, k]);
-                    self.points[self.starts[c] as usize..self.starts[c + 1] as usize]
-                        .iter()
-                        .any(|q| (q - p).norm_squared() <= self.tolerance_sq)
-                })
-            })
-        })
+                    for q in &self.points[self.starts[c] as usize..self.starts[c + 1] as usize] {
+                        nearest = nearest.min((q - p).norm_squared());
+                    }
+                }
+            }
+        }
+        (nearest <= self.tolerance_sq).then_some(nearest)
     }
 }
 
