@@ -28,7 +28,7 @@ use super::solid_prior::{PriorRays, append_prior_rays};
 use crate::geometry::mirror_symmetry::MirrorPlane;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::objects::cell_evidence::{GLIMPSE_MARGIN_M, ViewEvidence, view_evidence};
-use crate::objects::hidden_space::{CellRules, FreeCells, HiddenCells, HiddenSpaceCache};
+use crate::objects::hidden_space::{CellRules, FREE_CLEARANCE_M, FreeCells, HiddenCells, HiddenSpaceCache};
 use crate::objects::keyframes::KeyframeWindow;
 use crate::objects::object_view::{ObjectView, PixelState};
 
@@ -255,7 +255,8 @@ pub fn sample_training_rays(
 
 /// [`sample_training_rays`], each ray reflected across `reflect` when given. Then only rays of
 /// the object's pixels with valid depth are kept, and not those whose reflected surface point a
-/// view saw free by [`GLIMPSE_MARGIN_M`] (the object is not symmetric there): a reflected ray of
+/// view saw free by [`GLIMPSE_MARGIN_M`] (the object is not symmetric there) or that pass the
+/// object's observed surface before it ([`passes_the_observed_surface`]): a reflected ray of
 /// another object's pixel asks for free space all the way to that object, and one that grazed the
 /// floor beside the object, reflected across a plane a degree off, cuts through its base.
 fn sample_rays(
@@ -328,6 +329,9 @@ fn sample_rays(
             .filter(|_| depth > 0.0 && cfg.carving_samples() > 0)
             .and_then(|c| carving_interval(c, free_end, MIN_CARVE_M));
         depths_along_ray(depth, state, max_depth, carve, cfg, rng, &mut z);
+        if reflect.is_some() && passes_the_observed_surface(views, &camera, &dir, &z, depth) {
+            continue;
+        }
 
         let origin = camera - field_origin.coords;
         for &zi in &z {
@@ -347,6 +351,25 @@ fn sample_rays(
         out.states.push(state);
     }
     out.with_colour_rays_first()
+}
+
+/// Whether a sample of the ray from `camera` along `dir` before its surface at `depth` (by more
+/// than [`FREE_CLEARANCE_M`]) lies within [`FREE_CLEARANCE_M`] of the object's surface as a view
+/// sees it: a reflected ray that passes the real object on its way asks its thin parts (a lamp's
+/// 2.6 cm pole, beside which a plane 1 cm off puts the pole's mirror image) to be empty.
+fn passes_the_observed_surface(
+    views: &[&ObjectView],
+    camera: &Point3<f32>,
+    dir: &Vector3<f32>,
+    z: &[f32],
+    depth: f32,
+) -> bool {
+    z.iter().filter(|&&zi| zi < depth - FREE_CLEARANCE_M).any(|&zi| {
+        let p = camera + dir * zi;
+        views
+            .iter()
+            .any(|v| view_evidence(v, &p, FREE_CLEARANCE_M) == ViewEvidence::AtObjectSurface)
+    })
 }
 
 /// The camera centre and the ray direction (camera z = 1) of full-frame pixel (`u`, `row`).

@@ -270,3 +270,33 @@ fn mirrored_rays_see_the_mirror_image_unless_a_view_saw_it_free() {
     let checked = draw(&[&in_front, &through_the_image], 1);
     assert_eq!(checked.num_rays(), 0, "{} kept", checked.num_rays());
 }
+
+#[test]
+fn a_mirrored_ray_that_passes_a_thin_pole_before_its_surface_is_dropped() {
+    use crate::objects::view_fixtures::{Solid, aabb, render};
+    // A 2.6 cm pole seen from +x, 40 cm away; its axis is the plane x = 0.013.
+    let scene = [Solid {
+        aabb: aabb([0.0, 0.987, 0.0], [0.026, 1.013, 1.0]),
+        is_object: true,
+    }];
+    let view = render([0.426, 1.0, 0.5], -std::f32::consts::FRAC_PI_2, &scene);
+    let cfg = RaySamplerConfig {
+        box_free_samples: Some(0),
+        ..RaySamplerConfig::OBJECT
+    }
+    .with_rays_per_step(4000);
+    let kept = |axis: f32| {
+        let plane = MirrorPlane::vertical(0.0, axis);
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        sample_rays(&[&view], &[0], &Point3::origin(), None, &cfg, Some(&plane), &mut rng).num_rays()
+    };
+    let pole_rays = view.states.iter().filter(|s| **s == PixelState::ThisObject).count() * 4000 / view.states.len();
+    // Across the true axis a reflected ray ends on the pole's far side, through space the view
+    // saw behind it; across a plane 2.2 cm off it ends behind the pole, passing through it.
+    let (on_axis, off_axis) = (kept(0.013), kept(0.035));
+    assert!(
+        on_axis * 10 > pole_rays * 8,
+        "on the axis {on_axis} of about {pole_rays} pole rays kept"
+    );
+    assert!(off_axis * 3 < on_axis, "off the axis {off_axis} kept, on it {on_axis}");
+}
