@@ -33,8 +33,27 @@ pub struct FittedBounds {
     pub oriented_box: OrientedBox,
     /// Cloud voxels when the box was fitted.
     pub fitted_at_points: usize,
-    /// The mirror plane: searched again at this refit, or the last one kept.
-    pub mirror: MirrorFit,
+    /// The mirror plane: searched again at this refit, or the last one kept (none if never
+    /// searched).
+    pub mirror: Option<MirrorFit>,
+}
+
+/// Whether refits search the cloud for a mirror plane.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MirrorSearch {
+    /// Search when the last search went stale (a sampler reflects rays across the plane).
+    Search,
+    /// Keep what there is (no sampler uses a plane: the search would only cost time).
+    Skip,
+}
+
+/// What a refit does with the mirror plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MirrorStep {
+    /// Search the cloud now.
+    Search,
+    /// Keep this one.
+    Keep(Option<MirrorFit>),
 }
 
 /// Whether a box fitted at `fitted_at` voxels is stale now that the cloud has `current` voxels.
@@ -50,11 +69,12 @@ pub fn box_is_stale(fitted_at: Option<usize>, current: usize, growth: f32) -> bo
 /// parallel. Growth is `bounds_refresh_growth` while streaming and 0 once the stream has ended
 /// (every grown box is refitted). A refitted object's mirror plane is searched again when its
 /// cloud has grown by [`MIRROR_REFRESH_GROWTH`] since the last search (0 once the stream has
-/// ended). Returns, in input order, each stale object's key and its new bounds, or why it has
-/// none yet.
+/// ended; never under [`MirrorSearch::Skip`]). Returns, in input order, each stale object's key
+/// and its new bounds, or why it has none yet.
 pub fn refit_stale_boxes<'a, K: Send>(
     objects: impl IntoIterator<Item = (K, Option<usize>, Option<MirrorFit>, &'a ObservedCloud)>,
     phase: StreamPhase,
+    mirror_search: MirrorSearch,
     cfg: &ObjectConfig,
 ) -> Vec<(K, Result<FittedBounds>)> {
     let (growth, mirror_growth) = match phase {
@@ -69,21 +89,24 @@ pub fn refit_stale_boxes<'a, K: Send>(
     stale
         .into_par_iter()
         .map(|(key, mirror, cloud)| {
-            let search = mirror.is_none_or(|m| box_is_stale(Some(m.fitted_at_points), cloud.len(), mirror_growth));
-            let previous = mirror.filter(|_| !search);
-            (key, fit_object_bounds(cloud, previous, cfg))
+            let stale = mirror.is_none_or(|m| box_is_stale(Some(m.fitted_at_points), cloud.len(), mirror_growth));
+            let step = match mirror_search {
+                MirrorSearch::Search if stale => MirrorStep::Search,
+                MirrorSearch::Search | MirrorSearch::Skip => MirrorStep::Keep(mirror),
+            };
+            (key, fit_object_bounds(cloud, step, cfg))
         })
         .collect()
 }
 
 /// The minimum-volume box of the cloud, thinned to `bounds_voxel_m`, every edge ≥ `min_extent_m`.
 pub fn fit_object_box(cloud: &ObservedCloud, cfg: &ObjectConfig) -> Result<OrientedBox> {
-    Ok(fit_object_bounds(cloud, None, cfg)?.oriented_box)
+    Ok(fit_object_bounds(cloud, MirrorStep::Keep(None), cfg)?.oriented_box)
 }
 
-/// The box of [`fit_object_box`] and the mirror plane of the same thinned cloud — searched
-/// for unless `mirror` is given, which is kept.
-pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: Option<MirrorFit>, cfg: &ObjectConfig) -> Result<FittedBounds> {
+/// The box of [`fit_object_box`] and, as `mirror` says, the mirror plane of the same thinned
+/// cloud searched now or the one given kept.
+pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &ObjectConfig) -> Result<FittedBounds> {
     if cloud.len() < MIN_POINTS_FOR_BOX {
         return Err(CatmapError::Degenerate(format!(
             "{} observed points, at least {MIN_POINTS_FOR_BOX} needed for a box",
@@ -92,10 +115,13 @@ pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: Option<MirrorFit>, cfg: 
     }
     let thinned = voxel_downsample(&cloud.points(), cfg.bounds_voxel_m);
     let oriented_box = fit_minimum_volume_box(&thinned)?.with_min_extent(cfg.min_extent_m);
-    let mirror = mirror.unwrap_or_else(|| MirrorFit {
-        plane: find_vertical_mirror(&thinned, &SymmetryConfig::default()).map(|f| f.plane),
-        fitted_at_points: cloud.len(),
-    });
+    let mirror = match mirror {
+        MirrorStep::Search => Some(MirrorFit {
+            plane: find_vertical_mirror(&thinned, &SymmetryConfig::default()).map(|f| f.plane),
+            fitted_at_points: cloud.len(),
+        }),
+        MirrorStep::Keep(kept) => kept,
+    };
     Ok(FittedBounds {
         oriented_box,
         fitted_at_points: cloud.len(),
@@ -146,7 +172,7 @@ mod tests {
                 ("grown", Some(n - 1), None, &cloud),
             ]
         };
-        let streaming = refit_stale_boxes(objects(), StreamPhase::Streaming, &cfg);
+        let streaming = refit_stale_boxes(objects(), StreamPhase::Streaming, MirrorSearch::Search, &cfg);
         let keys: Vec<&str> = streaming.iter().map(|(k, _)| *k).collect();
         assert_eq!(keys, vec!["new"], "one more point is less than the growth");
         let fitted = streaming[0].1.as_ref().expect("enough points");
@@ -154,11 +180,16 @@ mod tests {
             (fitted.oriented_box, fitted.fitted_at_points),
             (fit_object_box(&cloud, &cfg).expect("enough points"), n)
         );
-        let ended = refit_stale_boxes(objects(), StreamPhase::Ended, &cfg);
+        let ended = refit_stale_boxes(objects(), StreamPhase::Ended, MirrorSearch::Search, &cfg);
         let keys: Vec<&str> = ended.iter().map(|(k, _)| *k).collect();
         assert_eq!(keys, vec!["new", "grown"]);
         let few = ObservedCloud::new(0.01);
-        let none = refit_stale_boxes([("empty", Some(0), None, &few)], StreamPhase::Ended, &cfg);
+        let none = refit_stale_boxes(
+            [("empty", Some(0), None, &few)],
+            StreamPhase::Ended,
+            MirrorSearch::Search,
+            &cfg,
+        );
         assert!(none.is_empty(), "a cloud that did not grow keeps its box");
     }
 
@@ -176,8 +207,8 @@ mod tests {
         }
         let n = cloud.len();
         let cfg = ObjectConfig::default();
-        let fitted = fit_object_bounds(&cloud, None, &cfg).expect("enough points");
-        let plane = fitted.mirror.plane.expect("two posts are symmetric");
+        let fitted = fit_object_bounds(&cloud, MirrorStep::Search, &cfg).expect("enough points");
+        let plane = fitted.mirror.and_then(|m| m.plane).expect("two posts are symmetric");
         assert!(
             plane.normal.x.abs() > 0.999 && (plane.distance(&Point3::new(0.3, 0.0, 0.0))).abs() < 0.01,
             "{plane:?}"
@@ -188,9 +219,11 @@ mod tests {
             plane: None,
             fitted_at_points: (n as f32 / (1.0 + MIRROR_REFRESH_GROWTH)) as usize + 1,
         };
-        let streaming = refit_stale_boxes([("a", Some(1), Some(remembered), &cloud)], StreamPhase::Streaming, &cfg);
-        assert_eq!(streaming[0].1.as_ref().expect("fitted").mirror, remembered);
-        let ended = refit_stale_boxes([("a", Some(1), Some(remembered), &cloud)], StreamPhase::Ended, &cfg);
+        let refit =
+            |mirror, phase, search| refit_stale_boxes([("a", Some(1), Some(mirror), &cloud)], phase, search, &cfg);
+        let streaming = refit(remembered, StreamPhase::Streaming, MirrorSearch::Search);
+        assert_eq!(streaming[0].1.as_ref().expect("fitted").mirror, Some(remembered));
+        let ended = refit(remembered, StreamPhase::Ended, MirrorSearch::Search);
         assert_eq!(
             ended[0].1.as_ref().expect("fitted").mirror,
             fitted.mirror,
@@ -200,11 +233,17 @@ mod tests {
             fitted_at_points: remembered.fitted_at_points - 2,
             ..remembered
         };
-        let grown = refit_stale_boxes([("a", Some(1), Some(older), &cloud)], StreamPhase::Streaming, &cfg);
+        let grown = refit(older, StreamPhase::Streaming, MirrorSearch::Search);
         assert_eq!(
             grown[0].1.as_ref().expect("fitted").mirror,
             fitted.mirror,
             "grown past the growth"
+        );
+        let skipped = refit(older, StreamPhase::Ended, MirrorSearch::Skip);
+        assert_eq!(
+            skipped[0].1.as_ref().expect("fitted").mirror,
+            Some(older),
+            "no search without mirrored rays"
         );
     }
 }

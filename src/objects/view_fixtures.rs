@@ -65,12 +65,7 @@ pub(crate) fn render_pitched(eye: [f32; 3], yaw: f32, pitch: f32, scene: &[Solid
         frame: FrameIndex(0),
         world_from_camera: pose,
         intrinsics: k,
-        region: PixelBox {
-            u_min: 0,
-            v_min: 0,
-            u_max: k.width - 1,
-            v_max: k.height - 1,
-        },
+        region: PixelBox::whole_image(k.width, k.height),
         rgb: vec![[0; 3]; depth_m.len()],
         depth_m,
         states,

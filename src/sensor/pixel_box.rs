@@ -16,6 +16,16 @@ pub struct PixelBox {
 }
 
 impl PixelBox {
+    /// The box of a whole `width` × `height` image.
+    pub fn whole_image(width: u32, height: u32) -> Self {
+        Self {
+            u_min: 0,
+            v_min: 0,
+            u_max: width.saturating_sub(1),
+            v_max: height.saturating_sub(1),
+        }
+    }
+
     /// The box of one pixel.
     pub fn at(u: u32, v: u32) -> Self {
         Self {

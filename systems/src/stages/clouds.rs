@@ -1,7 +1,7 @@
 //! Cloud stage: observed point clouds grow with each frame, and oriented boxes follow them.
 
 use bevy_ecs::prelude::*;
-use catmap::objects::object_bounds::refit_stale_boxes;
+use catmap::objects::object_bounds::{MirrorSearch, refit_stale_boxes};
 use rayon::prelude::*;
 
 use crate::components::{Background, CameraFrame, FrameObservations, Object, ObjectBounds, ObjectCloud};
@@ -56,12 +56,16 @@ pub fn refresh_object_bounds(
             &cloud.0,
         )
     });
-    for ((entity, id), fitted) in refit_stale_boxes(clouds, progress.phase(), &settings.0.objects) {
+    let mirror_search = match settings.0.object_rays().mirror_rays() {
+        0 => MirrorSearch::Skip,
+        _ => MirrorSearch::Search,
+    };
+    for ((entity, id), fitted) in refit_stale_boxes(clouds, progress.phase(), mirror_search, &settings.0.objects) {
         let fitted = match fitted {
             Ok(fitted) => ObjectBounds {
                 oriented_box: fitted.oriented_box,
                 fitted_at_points: fitted.fitted_at_points,
-                mirror: Some(fitted.mirror),
+                mirror: fitted.mirror,
             },
             Err(e) => {
                 tracing::warn!(object = %id, error = %e, "cannot fit an oriented box yet");

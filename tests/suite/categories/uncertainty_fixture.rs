@@ -109,12 +109,7 @@ fn half_seen_views() -> Vec<ObjectView> {
                 frame: FrameIndex(i as u64),
                 world_from_camera: Isometry3::from_parts(Translation3::from(eye), rotation),
                 intrinsics: k,
-                region: PixelBox {
-                    u_min: 0,
-                    v_min: 0,
-                    u_max: k.width - 1,
-                    v_max: k.height - 1,
-                },
+                region: PixelBox::whole_image(k.width, k.height),
                 rgb: vec![[200, 80, 50]; depth_m.len()],
                 depth_m,
                 states,
