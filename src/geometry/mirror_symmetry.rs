@@ -17,6 +17,7 @@
 //! view saw is the caller's question (`crate::objects::mirror_prior`).
 
 use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
 
 /// A vertical plane `normal · p = offset` (world frame, z up).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -119,14 +120,7 @@ pub fn find_vertical_mirror(points: &[Point3<f32>], cfg: &SymmetryConfig) -> Opt
     let coarse = every_kth(points, COARSE_POINTS);
     let fine = every_kth(points, FINE_POINTS);
     let dtheta = std::f32::consts::PI / COARSE_DIRECTIONS as f32;
-    let mut best: Option<SymmetryFit> = None;
-    let consider = |fit: Option<SymmetryFit>, best: &mut Option<SymmetryFit>| {
-        if let Some(f) = fit
-            && best.is_none_or(|b| f.matched > b.matched)
-        {
-            *best = Some(f);
-        }
-    };
+    let mut planes = Vec::new();
     for t in 0..COARSE_DIRECTIONS {
         let theta = t as f32 * dtheta;
         let normal = Vector3::new(theta.cos(), theta.sin(), 0.0);
@@ -137,9 +131,17 @@ pub fn find_vertical_mirror(points: &[Point3<f32>], cfg: &SymmetryConfig) -> Opt
         // A plane within a fifth of the extent from the cloud's end reflects most points out.
         let margin = 0.2 * (hi - lo);
         let steps = ((hi - lo - 2.0 * margin) / COARSE_OFFSET_M).ceil().max(0.0) as usize;
-        for k in 0..=steps {
-            let plane = MirrorPlane::vertical(theta, lo + margin + k as f32 * COARSE_OFFSET_M);
-            consider(score(&plane, &coarse, &cells, cfg), &mut best);
+        planes.extend((0..=steps).map(|k| MirrorPlane::vertical(theta, lo + margin + k as f32 * COARSE_OFFSET_M)));
+    }
+    let fits: Vec<Option<SymmetryFit>> = planes
+        .par_iter()
+        .map(|plane| score(plane, &coarse, &cells, cfg, Residual::Skip))
+        .collect();
+    // The first of the best shares, in candidate order.
+    let mut best: Option<SymmetryFit> = None;
+    for f in fits.into_iter().flatten() {
+        if best.is_none_or(|b| f.matched > b.matched) {
+            best = Some(f);
         }
     }
     let coarse_best = best?;
@@ -170,24 +172,48 @@ fn nearest_of_the_best(
     cells: &VoxelSet,
     cfg: &SymmetryConfig,
 ) -> Option<SymmetryFit> {
-    let fits: Vec<SymmetryFit> = planes.filter_map(|p| score(&p, points, cells, cfg)).collect();
+    let planes: Vec<MirrorPlane> = planes.collect();
+    let fits: Vec<SymmetryFit> = planes
+        .par_iter()
+        .filter_map(|p| score(p, points, cells, cfg, Residual::Measure))
+        .collect();
     let best = fits.iter().map(|f| f.matched).fold(0.0f32, f32::max);
     fits.into_iter()
         .filter(|f| f.matched >= REFINE_KEEP * best)
         .min_by(|a, b| a.residual_m.total_cmp(&b.residual_m))
 }
 
+/// Whether a score measures the residual of its matched reflections (the coarse stage ranks by
+/// share alone, and stops at the first point within the tolerance).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Residual {
+    Skip,
+    Measure,
+}
+
 /// The matched share of `plane` over `points` (`None` with fewer than `cfg.min_scored` scored).
-fn score(plane: &MirrorPlane, points: &[Point3<f32>], cells: &VoxelSet, cfg: &SymmetryConfig) -> Option<SymmetryFit> {
+fn score(
+    plane: &MirrorPlane,
+    points: &[Point3<f32>],
+    cells: &VoxelSet,
+    cfg: &SymmetryConfig,
+    residual: Residual,
+) -> Option<SymmetryFit> {
     let (mut scored, mut matched, mut sum_sq) = (0usize, 0usize, 0f32);
     for p in points {
         if plane.distance(p).abs() < cfg.min_off_plane_m {
             continue;
         }
         scored += 1;
-        if let Some(d_sq) = cells.nearest_sq(&plane.reflect(p)) {
-            matched += 1;
-            sum_sq += d_sq;
+        let reflected = plane.reflect(p);
+        match residual {
+            Residual::Skip => matched += usize::from(cells.any_near(&reflected)),
+            Residual::Measure => {
+                if let Some(d_sq) = cells.nearest_sq(&reflected) {
+                    matched += 1;
+                    sum_sq += d_sq;
+                }
+            }
         }
     }
     (scored >= cfg.min_scored).then(|| SymmetryFit {
@@ -268,6 +294,24 @@ impl VoxelSet {
 
     fn index(&self, [x, y, z]: [usize; 3]) -> usize {
         (z * self.dims[1] + y) * self.dims[0] + x
+    }
+
+    /// Whether a point lies within the tolerance of `p`.
+    fn any_near(&self, p: &Point3<f32>) -> bool {
+        let Some([x, y, z]) = self.key(p) else {
+            return false;
+        };
+        let range = |k: usize, dim: usize| k.saturating_sub(1)..=(k + 1).min(dim - 1);
+        range(z, self.dims[2]).any(|k| {
+            range(y, self.dims[1]).any(|j| {
+                range(x, self.dims[0]).any(|i| {
+                    let c = self.index([i, j, k]);
+                    self.points[self.starts[c] as usize..self.starts[c + 1] as usize]
+                        .iter()
+                        .any(|q| (q - p).norm_squared() <= self.tolerance_sq)
+                })
+            })
+        })
     }
 
     /// The squared distance from `p` to its nearest point, if within the tolerance.
