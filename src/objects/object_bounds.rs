@@ -47,6 +47,13 @@ pub enum MirrorSearch {
     Skip,
 }
 
+impl MirrorSearch {
+    /// Search when a sampler reflects rays across the plane (`mirror_rays` per step), else skip.
+    pub fn for_mirror_rays(mirror_rays: usize) -> Self {
+        if mirror_rays > 0 { Self::Search } else { Self::Skip }
+    }
+}
+
 /// What a refit does with the mirror plane.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum MirrorStep {
@@ -239,7 +246,9 @@ mod tests {
             fitted.mirror,
             "grown past the growth"
         );
-        let skipped = refit(older, StreamPhase::Ended, MirrorSearch::Skip);
+        assert_eq!(MirrorSearch::for_mirror_rays(24), MirrorSearch::Search);
+        assert_eq!(MirrorSearch::for_mirror_rays(0), MirrorSearch::Skip);
+        let skipped = refit(older, StreamPhase::Ended, MirrorSearch::for_mirror_rays(0));
         assert_eq!(
             skipped[0].1.as_ref().expect("fitted").mirror,
             Some(older),

@@ -56,10 +56,7 @@ pub fn refresh_object_bounds(
             &cloud.0,
         )
     });
-    let mirror_search = match settings.0.object_rays().mirror_rays() {
-        0 => MirrorSearch::Skip,
-        _ => MirrorSearch::Search,
-    };
+    let mirror_search = MirrorSearch::for_mirror_rays(settings.0.object_rays().mirror_rays());
     for ((entity, id), fitted) in refit_stale_boxes(clouds, progress.phase(), mirror_search, &settings.0.objects) {
         let fitted = match fitted {
             Ok(fitted) => ObjectBounds {
