@@ -22,6 +22,7 @@
 //! | `fused_batch`, `tasks` | the one fused training step of any batch of fields, its parallel plan |
 //! | `object_field`, `batch`, `samples` | the occupancy field and its batch ([`FieldBatch`]) |
 //! | `ray_sampler` | the depth-guided sampler: keyframes, pixels, depths along rays |
+//! | `ray_sampler_config` | the sampler's settings (`RaySamplerConfig`): rays, samples, priors |
 //! | `free_space` | where free-space samples go: the part of a ray that crosses the object's box |
 //! | `tensors` | parameters as named candle tensors |
 //! | `category` | the CodeNeRF-style category field (shared weights, per-member codes), batched |
@@ -46,6 +47,7 @@ mod narrow_gradient;
 mod object_field;
 mod occupancy;
 mod ray_sampler;
+mod ray_sampler_config;
 pub mod reference;
 mod render;
 mod samples;

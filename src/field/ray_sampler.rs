@@ -20,7 +20,6 @@
 
 use nalgebra::{Point3, Vector3};
 use rand::{Rng, RngExt};
-use serde::{Deserialize, Serialize};
 
 use super::free_space::{CarveCounts, carving_interval, ray_box_interval};
 use super::samples::RaySamples;
@@ -28,156 +27,11 @@ use super::solid_prior::{PriorRays, append_prior_rays};
 use crate::geometry::mirror_symmetry::MirrorPlane;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::objects::cell_evidence::{GLIMPSE_MARGIN_M, ViewEvidence, view_evidence};
-use crate::objects::hidden_space::{CellRules, FREE_CLEARANCE_M, FreeCells, HiddenCells, HiddenSpaceCache};
+use crate::objects::hidden_space::{CellRules, FREE_CLEARANCE_M, HiddenSpaceCache};
 use crate::objects::keyframes::KeyframeWindow;
 use crate::objects::object_view::{ObjectView, PixelState};
 
-/// How one field's rays are drawn for a training step.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct RaySamplerConfig {
-    /// Keyframes that take part in one step (the two newest always do).
-    pub keyframes_per_step: usize,
-    /// Pixels drawn inside each taking-part keyframe's 2D box.
-    pub pixels_per_keyframe: usize,
-    /// Stratified samples in free space before the surface, from the camera (vMAP's).
-    pub free_samples: usize,
-    /// Stratified free-space samples on the part of the ray inside the object's box before the
-    /// surface band (the carving sampler, [`super::free_space`]). `None`: the schedule's choice
-    /// ([`RaySamplerConfig::carving_samples`]); 0: vMAP's sampler.
-    pub box_free_samples: Option<usize>,
-    /// Samples around (own pixels) or just before and behind (other pixels) the measured depth.
-    pub surface_samples: usize,
-    /// Half-width of the surface band, metres (the Gaussian's σ is a third of it).
-    pub surface_band_m: f32,
-    /// How far behind an occluder's depth a ray of another object's pixel is sampled, metres.
-    pub behind_occluder_m: f32,
-    /// Prior rays per step in the cells of the object's box that no view saw into, each sample
-    /// asked to be solid ([`crate::objects::hidden_space`]). `None`: the schedule's choice
-    /// ([`RaySamplerConfig::solid_prior_rays`]); 0: no solid prior.
-    pub hidden_solid_rays: Option<usize>,
-    /// Which hidden cells the solid prior draws from.
-    pub hidden_cells: HiddenCells,
-    /// Prior rays per step under the object's box, below the lowest point it was seen at, each
-    /// sample asked to be empty (what the object stands on); 0: none.
-    pub below_support_rays: usize,
-    /// Prior rays per step around the centres of the cells of the object's box that a view saw
-    /// free, each sample asked to be empty. `None`: the schedule's choice; 0: none.
-    pub seen_free_rays: Option<usize>,
-    /// Which cells the seen-free prior draws from.
-    pub free_cells: FreeCells,
-    /// Mirrored pixel draws per step for an object with a vertical mirror plane: keyframe rays
-    /// drawn as above and reflected across the plane, as if a camera on the other side had seen
-    /// the mirror image (a sofa seen from one end learns the other end's shape and the free space
-    /// before it). Only rays of the object's own pixels are kept, and not those whose reflected
-    /// surface point a view saw free. `None`: the schedule's choice
-    /// ([`RaySamplerConfig::mirror_rays`]); 0: none.
-    pub mirror_rays: Option<usize>,
-    /// Weight of the priors' loss (mean over their samples of −ln o, or −ln(1 − o) under the box).
-    pub hidden_solid_weight: f32,
-}
-
-impl RaySamplerConfig {
-    /// The same sampler drawing about `rays` rays per step: pixels per keyframe rounded up so that
-    /// keyframes × pixels ≥ `rays`.
-    pub fn with_rays_per_step(mut self, rays: usize) -> Self {
-        self.pixels_per_keyframe = rays.div_ceil(self.keyframes_per_step.max(1));
-        self
-    }
-
-    /// vMAP's object sampler: 5 keyframes × 24 pixels, 1 + 9 samples per ray.
-    pub const OBJECT: Self = Self {
-        keyframes_per_step: 5,
-        pixels_per_keyframe: 24,
-        free_samples: 1,
-        box_free_samples: None,
-        surface_samples: 9,
-        surface_band_m: 0.1,
-        behind_occluder_m: 0.05,
-        hidden_solid_rays: None,
-        hidden_cells: HiddenCells::Enclosed,
-        below_support_rays: 0,
-        seen_free_rays: None,
-        free_cells: FreeCells::SeenAndOpen,
-        mirror_rays: None,
-        hidden_solid_weight: 1.0,
-    };
-
-    /// vMAP's background sampler: 5 keyframes × 240 pixels (1 200 rays), 5 + 9 samples per ray.
-    pub const BACKGROUND: Self = Self {
-        keyframes_per_step: 5,
-        pixels_per_keyframe: 240,
-        free_samples: 5,
-        box_free_samples: Some(0),
-        surface_samples: 9,
-        surface_band_m: 0.1,
-        behind_occluder_m: 0.05,
-        hidden_solid_rays: None,
-        hidden_cells: HiddenCells::Enclosed,
-        below_support_rays: 0,
-        seen_free_rays: None,
-        free_cells: FreeCells::SeenAndOpen,
-        mirror_rays: None,
-        hidden_solid_weight: 1.0,
-    };
-
-    /// Samples per ray.
-    pub fn samples_per_ray(&self) -> usize {
-        self.free_samples + self.carving_samples() + self.surface_samples
-    }
-
-    /// The box samples this sampler draws (an unset count draws none: the mapper's config sets
-    /// it from the schedule before sampling, `MapperConfig::object_rays`).
-    pub fn carving_samples(&self) -> usize {
-        self.box_free_samples.unwrap_or(0)
-    }
-
-    /// The same sampler with an unset box sample count set to `samples`.
-    pub fn with_default_carving(mut self, samples: usize) -> Self {
-        self.box_free_samples.get_or_insert(samples);
-        self
-    }
-
-    /// The solid prior's rays per step (unset: none; the mapper's config sets them from the
-    /// schedule, `MapperConfig::object_rays`).
-    pub fn solid_prior_rays(&self) -> usize {
-        self.hidden_solid_rays.unwrap_or(0)
-    }
-
-    /// The seen-free prior's rays per step (unset: none, as for the solid prior).
-    pub fn seen_free_rays(&self) -> usize {
-        self.seen_free_rays.unwrap_or(0)
-    }
-
-    /// The mirrored rays per step (unset: none, as for the solid prior).
-    pub fn mirror_rays(&self) -> usize {
-        self.mirror_rays.unwrap_or(0)
-    }
-
-    /// The same sampler with an unset mirrored ray count set to `rays`.
-    pub fn with_default_mirror_rays(mut self, rays: usize) -> Self {
-        self.mirror_rays.get_or_insert(rays);
-        self
-    }
-
-    /// The same sampler with unset prior ray counts set to `solid` and `seen_free`.
-    pub fn with_default_priors(mut self, solid: usize, seen_free: usize) -> Self {
-        self.hidden_solid_rays.get_or_insert(solid);
-        self.seen_free_rays.get_or_insert(seen_free);
-        self
-    }
-
-    /// Rays per step when every keyframe slot is filled.
-    pub fn rays_per_step(&self) -> usize {
-        self.keyframes_per_step * self.pixels_per_keyframe
-    }
-}
-
-impl Default for RaySamplerConfig {
-    fn default() -> Self {
-        Self::OBJECT
-    }
-}
+pub use super::ray_sampler_config::RaySamplerConfig;
 
 /// The keyframes of one step: `recent` always, then draws (with replacement) from the other
 /// views until `count` views are chosen. With no other view, the recent ones are drawn again.
