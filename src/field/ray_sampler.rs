@@ -85,7 +85,7 @@ pub fn sample_window_rays(
             hidden: cfg.hidden_cells,
             free: cfg.free_cells,
         };
-        let space = cache.current(&views, fitted_box, rules);
+        let space = cache.current(&views, fitted_box, mirror, rules);
         append_prior_rays(&mut rays, space, &views, counts, field_origin, rng);
     }
     rays

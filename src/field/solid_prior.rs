@@ -89,6 +89,7 @@ mod tests {
             centres: vec![Point3::new(0.005, 0.005, 0.005)],
             free_centres: vec![Point3::new(-0.035, 0.025, -0.005)],
             open_centres: Vec::new(),
+            beyond_centres: Vec::new(),
         };
         let mut rays = RaySamples {
             samples_per_ray: 4,

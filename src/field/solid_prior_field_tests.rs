@@ -23,7 +23,7 @@ fn trained(free: FreeCells) -> (OccupancyField, Point3<f32>) {
         hidden: HiddenCells::Enclosed,
         free,
     };
-    let space = HiddenSpace::of_views(&views, &bed_box, rules);
+    let space = HiddenSpace::of_views(&views, &bed_box, None, rules);
     let origin = bed_box.center();
     let mut rng = seeded_rng(2, RngStream::ObjectField(ObjectId(1)));
     let mut batch = FieldBatch::new(AdamWConfig::default());

@@ -38,6 +38,7 @@ use rand::{Rng, RngExt};
 
 use super::cell_evidence::{CellEvidence, EvidenceGrid, GLIMPSE_MARGIN_M, ViewEvidence, cell_evidence, view_evidence};
 use super::object_view::ObjectView;
+use crate::geometry::mirror_symmetry::MirrorPlane;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::ids::FrameIndex;
 
@@ -86,6 +87,13 @@ pub enum FreeCells {
     /// cell seen free or glimpsed with the object's observed surface above it).
     #[default]
     SeenAndOpen,
+    /// Those, and the cells of the ring one cell thick around the box's sides and top that no
+    /// view saw free and none saw at the object's surface or behind another object — hidden
+    /// behind the object, or glimpsed — and whose mirror image (with a plane) is not in the box:
+    /// the region the object is meshed in reaches 0.9 cell past the box, and a field left to
+    /// itself fills it behind a sofa against a wall up to the wall. The box is where the object
+    /// was seen to end (its mirror image where it was seen to continue).
+    SeenOpenAndBeyond,
 }
 
 /// The rules that pick the priors' cells: the solid prior's and the seen-free prior's.
@@ -111,12 +119,21 @@ pub struct HiddenSpace {
     /// Centres of the open hidden cells the seen-free prior draws around too (under
     /// [`FreeCells::SeenAndOpen`]; else none), box frame, in cell order.
     pub open_centres: Vec<Point3<f32>>,
+    /// Centres of the ring cells beyond the box the seen-free prior draws around too (under
+    /// [`FreeCells::SeenOpenAndBeyond`]; else none), box frame, in cell order.
+    pub beyond_centres: Vec<Point3<f32>>,
 }
 
 impl HiddenSpace {
     /// The prior cells of `object_box` (world) given the object's keyframe crops `views`, picked
-    /// by `rules`.
-    pub fn of_views(views: &[&ObjectView], object_box: &OrientedBox, rules: CellRules) -> Self {
+    /// by `rules`; `mirror` is the object's mirror plane, if it has one (ring cells whose image
+    /// lies in the box are not taken).
+    pub fn of_views(
+        views: &[&ObjectView],
+        object_box: &OrientedBox,
+        mirror: Option<&MirrorPlane>,
+        rules: CellRules,
+    ) -> Self {
         let object_box = &object_box.upright();
         let n = CELLS_PER_AXIS;
         let cell_size = object_box.extents() / n as f32;
@@ -139,7 +156,7 @@ impl HiddenSpace {
         for k in 0..n {
             for j in 0..n {
                 for i in 0..n {
-                    let open_free = rules.free == FreeCells::SeenAndOpen;
+                    let open_free = rules.free != FreeCells::Seen;
                     match grid.at(i, j, k) {
                         CellEvidence::SeenFree => free_centres.push(centre_of(i, j, k)),
                         CellEvidence::Hidden => {
@@ -154,12 +171,18 @@ impl HiddenSpace {
                 }
             }
         }
+        let beyond_centres = if rules.free == FreeCells::SeenOpenAndBeyond {
+            ring_cells_beyond(views, object_box, mirror, margin_m)
+        } else {
+            Vec::new()
+        };
         Self {
             world_from_box: object_box.world_from_box,
             cell_size,
             centres,
             free_centres,
             open_centres,
+            beyond_centres,
         }
     }
 
@@ -169,6 +192,7 @@ impl HiddenSpace {
             hidden: self.centres.len(),
             seen_free: self.free_centres.len(),
             open: self.open_centres.len(),
+            beyond: self.beyond_centres.len(),
         }
     }
 
@@ -184,11 +208,11 @@ impl HiddenSpace {
 
     /// Whether the seen-free prior has cells to draw from.
     pub fn has_free_cells(&self) -> bool {
-        !(self.free_centres.is_empty() && self.open_centres.is_empty())
+        !(self.free_centres.is_empty() && self.open_centres.is_empty() && self.beyond_centres.is_empty())
     }
 
-    /// A point drawn near a cell seen free or an open cell (world frame, one cell drawn uniformly
-    /// from both), `None` when there is none: in the span [`FREE_DRAW_SPREAD`] × the cell's edges
+    /// A point drawn near a cell seen free, an open cell or a ring cell beyond the box (world
+    /// frame, one cell drawn uniformly from all), `None` when there is none: in the span [`FREE_DRAW_SPREAD`] × the cell's edges
     /// around its centre, checked against `views`. No point is kept that a view sees within
     /// [`FREE_CLEARANCE_M`] of the object's surface: the keyframe rays' surface samples teach the
     /// surface, and free draws packed around a lamp's 2.6 cm pole (the cells beside it are seen
@@ -199,14 +223,17 @@ impl HiddenSpace {
     /// After [`FREE_DRAW_TRIES`] misses the centre itself is taken.
     pub fn draw_free(&self, views: &[&ObjectView], rng: &mut impl Rng) -> Option<Point3<f32>> {
         let (seen, open) = (self.free_centres.len(), self.open_centres.len());
-        if seen + open == 0 {
+        let all = seen + open + self.beyond_centres.len();
+        if all == 0 {
             return None;
         }
-        let pick = rng.random_range(0..seen + open);
+        let pick = rng.random_range(0..all);
         let (centre, seen_cell) = if pick < seen {
             (self.free_centres[pick], true)
-        } else {
+        } else if pick < seen + open {
             (self.open_centres[pick - seen], false)
+        } else {
+            (self.beyond_centres[pick - seen - open], false)
         };
         for _ in 0..FREE_DRAW_TRIES {
             let p = self.around(centre, FREE_DRAW_SPREAD, rng);
@@ -254,6 +281,44 @@ impl HiddenSpace {
     }
 }
 
+/// Centres (box frame of the upright `object_box`, cells of its grid) of the ring one cell
+/// thick around its sides and top whose evidence in `views` is hidden or glimpsed, and whose
+/// image across `mirror` is outside the box ([`FreeCells::SeenOpenAndBeyond`]).
+fn ring_cells_beyond(
+    views: &[&ObjectView],
+    object_box: &OrientedBox,
+    mirror: Option<&MirrorPlane>,
+    margin_m: f32,
+) -> Vec<Point3<f32>> {
+    let n = CELLS_PER_AXIS as isize;
+    let cell_size = object_box.extents() / CELLS_PER_AXIS as f32;
+    let corner = Point3::from(-object_box.half_extents);
+    let inside = |a: isize| (0..n).contains(&a);
+    let mut centres = Vec::new();
+    for k in 0..=n {
+        for j in -1..=n {
+            for i in -1..=n {
+                if inside(i) && inside(j) && inside(k) {
+                    continue;
+                }
+                let centre =
+                    corner + cell_size.component_mul(&Vector3::new(i as f32 + 0.5, j as f32 + 0.5, k as f32 + 0.5));
+                let world = object_box.world_from_box * centre;
+                if mirror.is_some_and(|plane| object_box.contains(&plane.reflect(&world), 0.0)) {
+                    continue;
+                }
+                if matches!(
+                    cell_evidence(views, &world, margin_m),
+                    CellEvidence::Hidden | CellEvidence::Glimpsed
+                ) {
+                    centres.push(centre);
+                }
+            }
+        }
+    }
+    centres
+}
+
 /// The cells of one object's box the priors draw from (of [`CELLS_PER_AXIS`]³).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct PriorCells {
@@ -264,13 +329,20 @@ pub struct PriorCells {
     /// Open hidden cells, asked to be empty around their centres.
     #[serde(default)]
     pub open: usize,
+    /// Ring cells beyond the box, asked to be empty around their centres.
+    #[serde(default)]
+    pub beyond: usize,
 }
 
-/// One object's hidden space, recomputed only when its keyframes or its box changed.
+/// What a hidden space is computed from: the frames of the views, the box, the mirror plane and
+/// the rules.
+type HiddenSpaceKey = (Vec<FrameIndex>, OrientedBox, Option<MirrorPlane>, CellRules);
+
+/// One object's hidden space, recomputed only when its keyframes, its box or its plane changed.
 #[derive(Debug, Clone, Default)]
 pub struct HiddenSpaceCache {
-    /// The frames of the views, the box and the rules the space was computed from, and the space.
-    computed: Option<((Vec<FrameIndex>, OrientedBox, CellRules), HiddenSpace)>,
+    /// What the space was computed from, and the space.
+    computed: Option<(HiddenSpaceKey, HiddenSpace)>,
 }
 
 impl HiddenSpaceCache {
@@ -282,8 +354,19 @@ impl HiddenSpaceCache {
     /// The hidden space of `object_box` given `views`: the stored one when it was computed from
     /// the same frames and box, else computed now (the same inputs give the same space, so a run
     /// resumed with an empty cache continues bit-identically).
-    pub fn current(&mut self, views: &[&ObjectView], object_box: &OrientedBox, rules: CellRules) -> &HiddenSpace {
-        let key = (views.iter().map(|v| v.frame).collect::<Vec<_>>(), *object_box, rules);
+    pub fn current(
+        &mut self,
+        views: &[&ObjectView],
+        object_box: &OrientedBox,
+        mirror: Option<&MirrorPlane>,
+        rules: CellRules,
+    ) -> &HiddenSpace {
+        let key = (
+            views.iter().map(|v| v.frame).collect::<Vec<_>>(),
+            *object_box,
+            mirror.copied(),
+            rules,
+        );
         if self
             .computed
             .as_ref()
@@ -293,7 +376,7 @@ impl HiddenSpaceCache {
         }
         &self
             .computed
-            .get_or_insert_with(|| (key, HiddenSpace::of_views(views, object_box, rules)))
+            .get_or_insert_with(|| (key, HiddenSpace::of_views(views, object_box, mirror, rules)))
             .1
     }
 }

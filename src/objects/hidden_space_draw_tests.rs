@@ -23,7 +23,7 @@ const ENCLOSED: CellRules = CellRules {
 fn drawn_points_lie_in_hidden_cells() {
     let (scene, object_box) = slab_and_box();
     let front = render([0.0, -1.0, 0.2], 0.0, &scene);
-    let space = HiddenSpace::of_views(&[&front], &object_box, ALL);
+    let space = HiddenSpace::of_views(&[&front], &object_box, None, ALL);
     let mut rng = seeded_rng(3, RngStream::Mapper);
     for _ in 0..200 {
         let p = space.draw(&mut rng).expect("hidden cells");
@@ -49,7 +49,7 @@ fn draws_around_cells_seen_free_stay_out_of_the_object() {
     ];
     let views: Vec<&ObjectView> = views.iter().collect();
     let object_box = aabb([-0.8, 0.93, 0.0], [0.8, 2.53, 0.8]);
-    let space = HiddenSpace::of_views(&views, &object_box, ENCLOSED);
+    let space = HiddenSpace::of_views(&views, &object_box, None, ENCLOSED);
     let first_row = |p: &Point3<f32>| (p.y - 0.98).abs() < 1e-3;
     let world = |c: &Point3<f32>| space.world_from_box * c;
     assert!(

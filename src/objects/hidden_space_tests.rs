@@ -31,13 +31,13 @@ fn cells_behind_the_seen_face_are_hidden_and_cells_seen_through_are_not() {
         cell_evidence(&[&front], &Point3::new(0.0, 0.9, 0.2), margin),
         CellEvidence::SeenFree
     );
-    let only_front = HiddenSpace::of_views(&[&front], &object_box, ALL);
+    let only_front = HiddenSpace::of_views(&[&front], &object_box, None, ALL);
     assert!(only_front.hidden_share() > 0.8, "{}", only_front.hidden_share());
     // A side view sees the slab's edge and the room through the rest of the box: the cells
     // behind the slab are seen free, only the slab's own cells stay hidden.
     let side = render([2.0, 1.2, 0.2], -std::f32::consts::FRAC_PI_2, &scene);
     assert_eq!(cell_evidence(&[&front, &side], &behind, margin), CellEvidence::SeenFree);
-    let both = HiddenSpace::of_views(&[&front, &side], &object_box, ALL);
+    let both = HiddenSpace::of_views(&[&front, &side], &object_box, None, ALL);
     assert!(both.hidden_share() < 0.2, "{}", both.hidden_share());
     for c in &both.centres {
         let world = both.world_from_box * c;
@@ -57,7 +57,7 @@ fn cells_behind_another_object_are_not_hidden() {
         is_object: false,
     });
     let front = render([0.0, -1.0, 0.2], 0.0, &scene);
-    let space = HiddenSpace::of_views(&[&front], &object_box, ALL);
+    let space = HiddenSpace::of_views(&[&front], &object_box, None, ALL);
     assert!(space.centres.is_empty(), "{} hidden cells", space.centres.len());
     assert!(space.draw(&mut seeded_rng(0, RngStream::Mapper)).is_none());
 }
@@ -144,8 +144,8 @@ fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
             .filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y))
             .count()
     };
-    let all = HiddenSpace::of_views(&views, &table_box(), ALL);
-    let enclosed = HiddenSpace::of_views(&views, &table_box(), ENCLOSED);
+    let all = HiddenSpace::of_views(&views, &table_box(), None, ALL);
+    let enclosed = HiddenSpace::of_views(&views, &table_box(), None, ENCLOSED);
     assert!(under_top(&all) > 50, "{} hidden cells under the top", under_top(&all));
     assert_eq!(
         under_top(&enclosed),
@@ -181,6 +181,7 @@ fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
     let open = HiddenSpace::of_views(
         &views,
         &table_box(),
+        None,
         CellRules {
             hidden: HiddenCells::Enclosed,
             free: FreeCells::SeenAndOpen,
@@ -203,7 +204,7 @@ fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
     );
     // Seen from the front and above only, the space under the top is enclosed: the apron in
     // front, the box's faces elsewhere.
-    let closed = HiddenSpace::of_views(&[&above, &low], &table_box(), ENCLOSED);
+    let closed = HiddenSpace::of_views(&[&above, &low], &table_box(), None, ENCLOSED);
     assert!(
         under_top(&closed) > 50,
         "{} enclosed cells under the top",
@@ -233,8 +234,8 @@ fn space_under_an_overhang_that_opens_onto_occluded_space_is_not_enclosed() {
             .filter(|p| (0.35..0.65).contains(&p.z) && (1.1..1.45).contains(&p.y))
             .count()
     };
-    let all = HiddenSpace::of_views(&views, &table_box(), ALL);
-    let enclosed = HiddenSpace::of_views(&views, &table_box(), ENCLOSED);
+    let all = HiddenSpace::of_views(&views, &table_box(), None, ALL);
+    let enclosed = HiddenSpace::of_views(&views, &table_box(), None, ENCLOSED);
     assert!(
         front_half(&all) > 50,
         "{} hidden cells in the front half",
@@ -248,13 +249,13 @@ fn the_cache_recomputes_when_the_box_changes_and_only_then() {
     let (scene, object_box) = slab_and_box();
     let front = render([0.0, -1.0, 0.2], 0.0, &scene);
     let mut cache = HiddenSpaceCache::default();
-    let first = cache.current(&[&front], &object_box, ALL).clone();
-    assert_eq!(first, HiddenSpace::of_views(&[&front], &object_box, ALL));
+    let first = cache.current(&[&front], &object_box, None, ALL).clone();
+    assert_eq!(first, HiddenSpace::of_views(&[&front], &object_box, None, ALL));
     let shallower = aabb([-0.2, 1.0, 0.0], [0.2, 1.2, 0.4]);
-    let second = cache.current(&[&front], &shallower, ALL).clone();
+    let second = cache.current(&[&front], &shallower, None, ALL).clone();
     assert_ne!(second, first, "a new box, a new space");
-    assert_eq!(second, HiddenSpace::of_views(&[&front], &shallower, ALL));
-    assert_eq!(*cache.current(&[&front], &object_box, ALL), first);
+    assert_eq!(second, HiddenSpace::of_views(&[&front], &shallower, None, ALL));
+    assert_eq!(*cache.current(&[&front], &object_box, None, ALL), first);
 }
 
 #[test]
@@ -285,7 +286,7 @@ fn the_floor_glimpsed_under_a_frame_opens_the_gap_and_only_the_gap() {
         hidden: HiddenCells::Enclosed,
         free: FreeCells::SeenAndOpen,
     };
-    let space = HiddenSpace::of_views(&views, &bed_box, open);
+    let space = HiddenSpace::of_views(&views, &bed_box, None, open);
     let solid = world(&space, &space.centres);
     let free = [world(&space, &space.free_centres), world(&space, &space.open_centres)].concat();
     assert!(
@@ -303,7 +304,7 @@ fn the_floor_glimpsed_under_a_frame_opens_the_gap_and_only_the_gap() {
         free.iter().filter(|p| in_the_gap(p)).count()
     );
     // Under the rule of the cells seen free alone, the gap's middle is left to the field.
-    let seen = HiddenSpace::of_views(&views, &bed_box, ENCLOSED);
+    let seen = HiddenSpace::of_views(&views, &bed_box, None, ENCLOSED);
     assert_eq!(seen.centres, space.centres, "the free rule does not pick hidden cells");
     assert!(seen.open_centres.is_empty());
 }
@@ -339,12 +340,13 @@ fn space_seen_beside_the_object_does_not_open_its_inside() {
     let space = HiddenSpace::of_views(
         &views,
         &sofa_box,
+        None,
         CellRules {
             hidden: HiddenCells::Enclosed,
             free: FreeCells::SeenAndOpen,
         },
     );
-    let all = HiddenSpace::of_views(&views, &sofa_box, ALL);
+    let all = HiddenSpace::of_views(&views, &sofa_box, None, ALL);
     let hidden_inside = all
         .centres
         .iter()
@@ -357,4 +359,95 @@ fn space_seen_beside_the_object_does_not_open_its_inside() {
         .filter(|c| inside_the_back(&(space.world_from_box * *c)))
         .count();
     assert_eq!(drawn_free, 0, "cells inside the back drawn free");
+}
+
+/// A sofa (the object, 1.6 × 0.9 × 0.8 m) with its back 7 cm from a wall, on the floor, seen
+/// from its front and from its +x end, both from above; its box is the sofa's.
+fn sofa_against_a_wall() -> (Vec<ObjectView>, OrientedBox) {
+    let other = |min, max| Solid {
+        aabb: aabb(min, max),
+        is_object: false,
+    };
+    let scene = [
+        Solid {
+            aabb: aabb([-0.8, 2.0, 0.0], [0.8, 2.9, 0.8]),
+            is_object: true,
+        },
+        other([-5.0, 2.97, 0.0], [5.0, 3.1, 3.0]),
+        other([-5.0, -5.0, -0.1], [5.0, 5.0, 0.0]),
+    ];
+    let views = vec![
+        render_pitched([0.0, 0.4, 1.5], 0.0, -0.5, &scene),
+        render_pitched([2.6, 2.45, 1.4], -std::f32::consts::FRAC_PI_2, -0.4, &scene),
+    ];
+    (views, aabb([-0.8, 2.0, 0.0], [0.8, 2.9, 0.8]))
+}
+
+#[test]
+fn the_hidden_gap_behind_a_sofa_beyond_its_box_is_drawn_empty_unless_its_mirror_image_holds_it() {
+    let (views, sofa_box) = sofa_against_a_wall();
+    let views: Vec<&ObjectView> = views.iter().collect();
+    let rules = CellRules {
+        hidden: HiddenCells::Enclosed,
+        free: FreeCells::SeenOpenAndBeyond,
+    };
+    let space = HiddenSpace::of_views(&views, &sofa_box, None, rules);
+    let world: Vec<Point3<f32>> = space.beyond_centres.iter().map(|c| space.world_from_box * c).collect();
+    let in_the_gap = |p: &&Point3<f32>| p.y > 2.9 && p.y < 2.97 && p.z < 0.8 && p.x.abs() < 0.8;
+    assert!(
+        world.iter().filter(in_the_gap).count() > 50,
+        "the gap between the back and the wall: {} of {}",
+        world.iter().filter(in_the_gap).count(),
+        world.len()
+    );
+    assert!(
+        world.iter().all(|p| !sofa_box.contains(p, 0.0)),
+        "ring cells lie beyond the box"
+    );
+    // Before the front, the views see the sofa's surface (the two corner cells by the floor
+    // beyond its ends are glimpsed: the floor just behind them).
+    let before: Vec<_> = world.iter().filter(|p| p.y < 2.0 && p.x.abs() < 0.8).collect();
+    assert!(
+        before.is_empty(),
+        "none before the seen front (at its surface): {before:?}"
+    );
+    // Past the +x end and above the top the views saw free (but by the floor, glimpsed).
+    let past: Vec<_> = world
+        .iter()
+        .filter(|p| (p.x > 0.8 || p.z > 0.8) && p.z > 0.05)
+        .collect();
+    assert!(
+        past.is_empty(),
+        "none past the seen end or above the seen top: {past:?}"
+    );
+    assert!(
+        world.iter().all(|p| p.z > 0.0),
+        "none under the box (the support prior's)"
+    );
+    let mut rng = seeded_rng(5, RngStream::Mapper);
+    assert!(space.draw_free(&views, &mut rng).is_some());
+    // A plane 2 cm before the back (its normal along y): the back's mirror image continues
+    // into the gap, which is left to the mirrored rays.
+    let plane = MirrorPlane {
+        normal: nalgebra::Vector3::y(),
+        offset: 2.88,
+    };
+    let mirrored = HiddenSpace::of_views(&views, &sofa_box, Some(&plane), rules);
+    let mirrored_world: Vec<Point3<f32>> = mirrored
+        .beyond_centres
+        .iter()
+        .map(|c| mirrored.world_from_box * c)
+        .collect();
+    assert_eq!(mirrored_world.iter().filter(in_the_gap).count(), 0);
+    assert!(mirrored_world.len() < world.len());
+    // Under the rule of seen and open cells, no ring cell.
+    let open = CellRules {
+        free: FreeCells::SeenAndOpen,
+        ..rules
+    };
+    assert!(
+        HiddenSpace::of_views(&views, &sofa_box, None, open)
+            .beyond_centres
+            .is_empty()
+    );
 }
