@@ -3,6 +3,7 @@
 use crate::categories::class_registration::CategoryConfig;
 use crate::categories::subcategories::SubcategoryAssignment;
 use crate::field::RaySamplerConfig;
+use crate::objects::config::{BoxFit, ObjectConfig};
 use crate::training::SchedulePolicy;
 
 use super::MapperConfig;
@@ -81,6 +82,17 @@ impl MapperConfig {
                 SchedulePolicy::Fast => SubcategoryAssignment::Best,
                 SchedulePolicy::Paper => SubcategoryAssignment::First,
             });
+        cfg
+    }
+
+    /// The object settings the run uses: `objects`, its unset `box_fit` set by the schedule —
+    /// upright boxes under `fast`, the paper's minimum-volume boxes under `paper`.
+    pub fn object_settings(&self) -> ObjectConfig {
+        let mut cfg = self.objects.clone();
+        cfg.box_fit.get_or_insert(match self.training_policy() {
+            SchedulePolicy::Fast => BoxFit::Upright,
+            SchedulePolicy::Paper => BoxFit::MinimumVolume,
+        });
         cfg
     }
 

@@ -24,6 +24,20 @@ pub struct ObjectConfig {
     pub background_pixel_stride: u32,
     /// Voxel edge of the background's observed cloud, metres.
     pub background_voxel_m: f32,
+    /// How the oriented box is fitted to the thinned cloud. `None`: the schedule's choice
+    /// ([`crate::config::MapperConfig::object_settings`]).
+    pub box_fit: Option<BoxFit>,
+}
+
+/// How an object's oriented box is fitted to its observed cloud.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoxFit {
+    /// The minimum-volume box (METHOD.md §2): it leans when a partly seen object's cloud does.
+    #[default]
+    MinimumVolume,
+    /// The upright box of least footprint (z along world z): furniture stands upright.
+    Upright,
 }
 
 impl Default for ObjectConfig {
@@ -37,6 +51,7 @@ impl Default for ObjectConfig {
             bounds_voxel_m: 0.02,
             background_pixel_stride: 4,
             background_voxel_m: 0.05,
+            box_fit: None,
         }
     }
 }

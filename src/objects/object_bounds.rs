@@ -2,8 +2,8 @@
 
 use crate::error::{CatmapError, Result};
 use crate::geometry::mirror_symmetry::{MirrorPlane, SymmetryConfig, find_vertical_mirror};
-use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box};
-use crate::objects::config::ObjectConfig;
+use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box, fit_upright_box};
+use crate::objects::config::{BoxFit, ObjectConfig};
 use crate::objects::observed_cloud::{ObservedCloud, voxel_downsample};
 use crate::training::StreamPhase;
 use rayon::prelude::*;
@@ -106,7 +106,8 @@ pub fn refit_stale_boxes<'a, K: Send>(
         .collect()
 }
 
-/// The minimum-volume box of the cloud, thinned to `bounds_voxel_m`, every edge ≥ `min_extent_m`.
+/// The box of the cloud, thinned to `bounds_voxel_m`, fitted as `box_fit` says (unset: the
+/// minimum-volume box), every edge ≥ `min_extent_m`.
 pub fn fit_object_box(cloud: &ObservedCloud, cfg: &ObjectConfig) -> Result<OrientedBox> {
     Ok(fit_object_bounds(cloud, MirrorStep::Keep(None), cfg)?.oriented_box)
 }
@@ -121,7 +122,11 @@ pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &Object
         )));
     }
     let thinned = voxel_downsample(&cloud.points(), cfg.bounds_voxel_m);
-    let oriented_box = fit_minimum_volume_box(&thinned)?.with_min_extent(cfg.min_extent_m);
+    let oriented_box = match cfg.box_fit.unwrap_or_default() {
+        BoxFit::MinimumVolume => fit_minimum_volume_box(&thinned)?,
+        BoxFit::Upright => fit_upright_box(&thinned)?,
+    };
+    let oriented_box = oriented_box.with_min_extent(cfg.min_extent_m);
     let mirror = match mirror {
         MirrorStep::Search => Some(MirrorFit {
             plane: find_vertical_mirror(&thinned, &SymmetryConfig::default()).map(|f| f.plane),

@@ -57,7 +57,9 @@ pub fn refresh_object_bounds(
         )
     });
     let mirror_search = MirrorSearch::for_mirror_rays(settings.0.object_rays().mirror_rays());
-    for ((entity, id), fitted) in refit_stale_boxes(clouds, progress.phase(), mirror_search, &settings.0.objects) {
+    for ((entity, id), fitted) in
+        refit_stale_boxes(clouds, progress.phase(), mirror_search, &settings.0.object_settings())
+    {
         let fitted = match fitted {
             Ok(fitted) => ObjectBounds {
                 oriented_box: fitted.oriented_box,
