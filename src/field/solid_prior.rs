@@ -90,7 +90,6 @@ mod tests {
             free_centres: vec![Point3::new(-0.035, 0.025, -0.005)],
             open_centres: Vec::new(),
             beyond_centres: Vec::new(),
-            seen_surface: Default::default(),
         };
         let mut rays = RaySamples {
             samples_per_ray: 4,

@@ -38,7 +38,6 @@ use rand::{Rng, RngExt};
 
 use super::cell_evidence::{CellEvidence, EvidenceGrid, GLIMPSE_MARGIN_M, ViewEvidence, cell_evidence, view_evidence};
 use super::object_view::ObjectView;
-use super::seen_surface::SeenSurface;
 use crate::geometry::mirror_symmetry::MirrorPlane;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::ids::FrameIndex;
@@ -61,11 +60,6 @@ pub const FREE_DRAW_TRIES: usize = 4;
 /// How far from the object's surface, as a view sees it, a free draw must lie, metres of camera
 /// depth.
 pub const FREE_CLEARANCE_M: f32 = 0.03;
-
-/// Every how many pixels (along rows and columns) the keyframe crops are read for the points the
-/// object was seen at ([`SeenSurface`]): a lamp's 2.6 cm pole 2.5 m from a 640-pixel camera
-/// is 6 pixels wide.
-pub const SEEN_SURFACE_STRIDE: u32 = 2;
 
 /// Which hidden cells the solid prior asks to be solid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -91,6 +85,7 @@ pub enum FreeCells {
     /// Those, and the hidden cells open sideways onto space a view saw
     /// through under the object (walking along box x or y through hidden cells, a walk ends at a
     /// cell seen free or glimpsed with the object's observed surface above it).
+    #[default]
     SeenAndOpen,
     /// Those, and the cells of the ring one cell thick around the box's sides and top that no
     /// view saw free and none saw at the object's surface or behind another object — hidden
@@ -98,7 +93,6 @@ pub enum FreeCells {
     /// the region the object is meshed in reaches 0.9 cell past the box, and a field left to
     /// itself fills it behind a sofa against a wall up to the wall. The box is where the object
     /// was seen to end (its mirror image where it was seen to continue).
-    #[default]
     SeenOpenAndBeyond,
 }
 
@@ -128,9 +122,6 @@ pub struct HiddenSpace {
     /// Centres of the ring cells beyond the box the seen-free prior draws around too (under
     /// [`FreeCells::SeenOpenAndBeyond`]; else none), box frame, in cell order.
     pub beyond_centres: Vec<Point3<f32>>,
-    /// Where the views saw the object: no free draw lies within
-    /// [`super::seen_surface::SURFACE_CLEARANCE_M`] of it, nor any cell centre above.
-    pub seen_surface: SeenSurface,
 }
 
 impl HiddenSpace {
@@ -180,15 +171,11 @@ impl HiddenSpace {
                 }
             }
         }
-        let mut beyond_centres = if rules.free == FreeCells::SeenOpenAndBeyond {
+        let beyond_centres = if rules.free == FreeCells::SeenOpenAndBeyond {
             ring_cells_beyond(views, object_box, mirror, margin_m)
         } else {
             Vec::new()
         };
-        let seen_surface = SeenSurface::of_views(views, SEEN_SURFACE_STRIDE);
-        for free in [&mut free_centres, &mut open_centres, &mut beyond_centres] {
-            free.retain(|c| !seen_surface.is_near(&(object_box.world_from_box * c)));
-        }
         Self {
             world_from_box: object_box.world_from_box,
             cell_size,
@@ -196,7 +183,6 @@ impl HiddenSpace {
             free_centres,
             open_centres,
             beyond_centres,
-            seen_surface,
         }
     }
 
@@ -234,10 +220,7 @@ impl HiddenSpace {
     /// cell's half diagonal before the surface on the centre's pixel; the span's other points lie
     /// on other pixels, which may see something nearer: a point around a seen-free centre is kept
     /// only when a view also sees it free by [`GLIMPSE_MARGIN_M`]. No view saw into an open cell.
-    /// No point is kept within [`super::seen_surface::SURFACE_CLEARANCE_M`] (3D) of a point the
-    /// object was seen at: beside a lamp's pole the views see free space on every side, and no
-    /// view sees the pole's surface along the line of sight of a point a few millimetres from it.
-    /// After [`FREE_DRAW_TRIES`] misses the centre itself is taken (no centre lies that near).
+    /// After [`FREE_DRAW_TRIES`] misses the centre itself is taken.
     pub fn draw_free(&self, views: &[&ObjectView], rng: &mut impl Rng) -> Option<Point3<f32>> {
         let (seen, open) = (self.free_centres.len(), self.open_centres.len());
         let all = seen + open + self.beyond_centres.len();
@@ -262,7 +245,7 @@ impl HiddenSpace {
                     .iter()
                     .any(|v| view_evidence(v, &p, GLIMPSE_MARGIN_M) == ViewEvidence::Free)
             };
-            if !near_surface && (!seen_cell || seen_free()) && !self.seen_surface.is_near(&p) {
+            if !near_surface && (!seen_cell || seen_free()) {
                 return Some(p);
             }
         }

@@ -10,6 +10,5 @@ pub mod object_bounds;
 pub mod object_view;
 pub mod observed_cloud;
 pub mod observed_space;
-pub mod seen_surface;
 #[cfg(test)]
 pub(crate) mod view_fixtures;
