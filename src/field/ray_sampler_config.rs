@@ -71,7 +71,7 @@ impl RaySamplerConfig {
         hidden_cells: HiddenCells::Enclosed,
         below_support_rays: 0,
         seen_free_rays: None,
-        free_cells: FreeCells::SeenAndOpen,
+        free_cells: FreeCells::SeenOpenAndBeyond,
         mirror_rays: None,
         hidden_solid_weight: 1.0,
     };

@@ -85,7 +85,6 @@ pub enum FreeCells {
     /// Those, and the hidden cells open sideways onto space a view saw
     /// through under the object (walking along box x or y through hidden cells, a walk ends at a
     /// cell seen free or glimpsed with the object's observed surface above it).
-    #[default]
     SeenAndOpen,
     /// Those, and the cells of the ring one cell thick around the box's sides and top that no
     /// view saw free and none saw at the object's surface or behind another object — hidden
@@ -93,6 +92,7 @@ pub enum FreeCells {
     /// the region the object is meshed in reaches 0.9 cell past the box, and a field left to
     /// itself fills it behind a sofa against a wall up to the wall. The box is where the object
     /// was seen to end (its mirror image where it was seen to continue).
+    #[default]
     SeenOpenAndBeyond,
 }
 
