@@ -45,6 +45,10 @@ impl MapperConfig {
     /// a vertical mirror plane.
     pub const MIRROR_RAYS: usize = 24;
 
+    /// Pixels per keyframe drawn among the object's own pixels by the `fast` schedule's object
+    /// sampler (`fields.object_rays.own_pixel_draws` unset): a third of the 24.
+    pub const OWN_PIXEL_DRAWS: usize = 8;
+
     /// The schedule that applies: `schedule.policy`, except that the offline protocol is the
     /// paper's fixed one (its classes are registered on the finished per-object fields).
     pub fn training_policy(&self) -> SchedulePolicy {
@@ -55,20 +59,26 @@ impl MapperConfig {
         }
     }
 
-    /// The object sampler the run uses: `fields.object_rays`, its unset `box_free_samples` and
-    /// prior and mirrored ray counts set by the schedule — [`Self::CARVING_SAMPLES`],
-    /// [`Self::PRIOR_RAYS`] and [`Self::MIRROR_RAYS`] under `fast`, none (vMAP's sampler, no
-    /// priors) under `paper`.
+    /// The object sampler the run uses: `fields.object_rays`, its unset `box_free_samples`,
+    /// prior and mirrored ray counts and own-pixel draws set by the schedule —
+    /// [`Self::CARVING_SAMPLES`], [`Self::PRIOR_RAYS`], [`Self::MIRROR_RAYS`] and
+    /// [`Self::OWN_PIXEL_DRAWS`] under `fast`, none (vMAP's sampler, no priors) under `paper`.
     pub fn object_rays(&self) -> RaySamplerConfig {
-        let (carving, priors, mirror) = match self.training_policy() {
-            SchedulePolicy::Fast => (Self::CARVING_SAMPLES, Self::PRIOR_RAYS, Self::MIRROR_RAYS),
-            SchedulePolicy::Paper => (0, 0, 0),
+        let (carving, priors, mirror, own) = match self.training_policy() {
+            SchedulePolicy::Fast => (
+                Self::CARVING_SAMPLES,
+                Self::PRIOR_RAYS,
+                Self::MIRROR_RAYS,
+                Self::OWN_PIXEL_DRAWS,
+            ),
+            SchedulePolicy::Paper => (0, 0, 0, 0),
         };
         self.fields
             .object_rays
             .with_default_carving(carving)
             .with_default_priors(priors, priors)
             .with_default_mirror_rays(mirror)
+            .with_default_own_pixel_draws(own)
     }
 
     /// The class registration the run uses: `categories`, its unset subcategory assignment set
@@ -188,12 +198,17 @@ mod tests {
     fn the_schedule_sets_the_unset_box_samples_and_priors_and_the_config_wins() {
         let sampler = |policy| {
             let rays = config(policy, Protocol::Online, Fields::Category).object_rays();
-            (rays.carving_samples(), rays.solid_prior_rays(), rays.seen_free_rays())
+            (
+                rays.carving_samples(),
+                rays.solid_prior_rays(),
+                rays.seen_free_rays(),
+                rays.own_pixel_draws(),
+            )
         };
-        assert_eq!(sampler(SchedulePolicy::Fast), (3, 8, 8));
+        assert_eq!(sampler(SchedulePolicy::Fast), (3, 8, 8, 8));
         assert_eq!(
             sampler(SchedulePolicy::Paper),
-            (0, 0, 0),
+            (0, 0, 0, 0),
             "the paper's sampler, no priors"
         );
         let mut off = config(SchedulePolicy::Fast, Protocol::Online, Fields::Category);
@@ -203,6 +218,18 @@ mod tests {
         assert_eq!((rays.solid_prior_rays(), rays.seen_free_rays()), (0, 2));
         let offline = config(SchedulePolicy::Fast, Protocol::Offline, Fields::Category).object_rays();
         assert_eq!(offline.solid_prior_rays(), 0, "offline runs the paper's protocol");
+        assert_eq!(offline.own_pixel_draws(), 0);
+    }
+
+    #[test]
+    fn the_schedule_sets_the_unset_box_fit_and_the_config_wins() {
+        let fit = |c: &MapperConfig| c.object_settings().box_fit;
+        let mut fast = config(SchedulePolicy::Fast, Protocol::Online, Fields::Category);
+        assert_eq!(fit(&fast), Some(BoxFit::Upright));
+        let paper = config(SchedulePolicy::Paper, Protocol::Online, Fields::Category);
+        assert_eq!(fit(&paper), Some(BoxFit::MinimumVolume));
+        fast.objects.box_fit = Some(BoxFit::MinimumVolume);
+        assert_eq!(fit(&fast), Some(BoxFit::MinimumVolume));
     }
 
     #[test]

@@ -13,6 +13,13 @@ pub struct RaySamplerConfig {
     pub keyframes_per_step: usize,
     /// Pixels drawn inside each taking-part keyframe's 2D box.
     pub pixels_per_keyframe: usize,
+    /// Of those, how many are drawn among the object's own pixels (up to
+    /// [`super::ray_sampler::OWN_PIXEL_TRIES`] draws each, uniform in the box; the rest uniform
+    /// in the box, as vMAP). A thin part (a lamp's 2.6 cm pole, 3 % of its box) gets rays in
+    /// proportion to its share of the object's pixels instead of the box's. Only objects alone
+    /// in their class draw them ([`super::sample_window_rays`] with a hidden space). `None`: the
+    /// schedule's choice ([`RaySamplerConfig::own_pixel_draws`]); 0: vMAP's draws.
+    pub own_pixel_draws: Option<usize>,
     /// Stratified samples in free space before the surface, from the camera (vMAP's).
     pub free_samples: usize,
     /// Stratified free-space samples on the part of the ray inside the object's box before the
@@ -62,6 +69,7 @@ impl RaySamplerConfig {
     pub const OBJECT: Self = Self {
         keyframes_per_step: 5,
         pixels_per_keyframe: 24,
+        own_pixel_draws: None,
         free_samples: 1,
         box_free_samples: None,
         surface_samples: 9,
@@ -80,6 +88,7 @@ impl RaySamplerConfig {
     pub const BACKGROUND: Self = Self {
         keyframes_per_step: 5,
         pixels_per_keyframe: 240,
+        own_pixel_draws: None,
         free_samples: 5,
         box_free_samples: Some(0),
         surface_samples: 9,
@@ -120,6 +129,24 @@ impl RaySamplerConfig {
     /// The seen-free prior's rays per step (unset: none, as for the solid prior).
     pub fn seen_free_rays(&self) -> usize {
         self.seen_free_rays.unwrap_or(0)
+    }
+
+    /// The pixels per keyframe drawn among the object's own (unset: none, as for the solid
+    /// prior).
+    pub fn own_pixel_draws(&self) -> usize {
+        self.own_pixel_draws.unwrap_or(0)
+    }
+
+    /// The same sampler drawing `draws` pixels per keyframe among the object's own.
+    pub fn with_own_pixel_draws(mut self, draws: usize) -> Self {
+        self.own_pixel_draws = Some(draws);
+        self
+    }
+
+    /// The same sampler with an unset own-pixel draw count set to `draws`.
+    pub fn with_default_own_pixel_draws(mut self, draws: usize) -> Self {
+        self.own_pixel_draws.get_or_insert(draws);
+        self
     }
 
     /// The mirrored rays per step (unset: none, as for the solid prior).

@@ -300,3 +300,70 @@ fn a_mirrored_ray_that_passes_a_thin_pole_before_its_surface_is_dropped() {
     );
     assert!(off_axis * 3 < on_axis, "off the axis {off_axis} kept, on it {on_axis}");
 }
+
+#[test]
+fn own_pixel_draws_put_rays_on_a_thin_object_that_the_box_draws_rarely_hit() {
+    use crate::objects::view_fixtures::{Solid, aabb, render};
+    // A 10 cm post 1.2 m before the camera: 5 % of the 96×96 crop.
+    let post = [Solid {
+        aabb: aabb([-0.05, 1.15, -1.0], [0.05, 1.25, 1.0]),
+        is_object: true,
+    }];
+    let view = render([0.0, 0.0, 0.0], 0.0, &post);
+    let share = |own_pixel_draws: usize| {
+        let cfg = RaySamplerConfig {
+            keyframes_per_step: 1,
+            own_pixel_draws: Some(own_pixel_draws),
+            ..RaySamplerConfig::OBJECT
+        };
+        let (mut own, mut all) = (0, 0);
+        for seed in 0..20 {
+            let rays = draw_unboxed(&[&view], &[0], &cfg, seed);
+            own += rays.states.iter().filter(|s| **s == PixelState::ThisObject).count();
+            all += rays.states.len();
+        }
+        own as f32 / all as f32
+    };
+    let uniform = share(0);
+    assert!(uniform < 0.12, "uniform in the box: {uniform}");
+    let half = share(12);
+    assert!(half > 0.3, "half the draws among own pixels: {half}");
+    // Each own-pixel draw tries 16 pixels: 1 − 0.95¹⁶ ≈ 56 % of them land on the post.
+    let all = share(24);
+    assert!(all > 0.45 && all > half, "every draw among own pixels: {all}");
+
+    // Through the keyframe window: only an object alone in its class (with a hidden space)
+    // draws them.
+    use crate::objects::config::KeyframeConfig;
+    use crate::objects::hidden_space::HiddenSpaceCache;
+    use crate::objects::keyframes::{KeyframeRole, KeyframeWindow};
+    let mut window = KeyframeWindow::default();
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    window.offer(
+        FrameIndex(0),
+        view,
+        KeyframeRole::Object,
+        &KeyframeConfig::default(),
+        &mut rng,
+    );
+    let cfg = RaySamplerConfig {
+        keyframes_per_step: 1,
+        own_pixel_draws: Some(24),
+        ..RaySamplerConfig::OBJECT
+    };
+    let post_box = aabb([-0.05, 1.15, -1.0], [0.05, 1.25, 1.0]);
+    let window_share = |alone: bool| {
+        let mut cache = HiddenSpaceCache::default();
+        let own: usize = (0..20)
+            .map(|seed| {
+                let hidden = alone.then_some((&mut cache, &post_box));
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                let rays = sample_window_rays(&window, &Point3::origin(), None, hidden, None, &cfg, &mut rng);
+                rays.states.iter().filter(|s| **s == PixelState::ThisObject).count()
+            })
+            .sum();
+        own as f32 / (20.0 * 24.0)
+    };
+    assert!(window_share(true) > 0.45, "alone in its class: {}", window_share(true));
+    assert!(window_share(false) < 0.12, "a member: {}", window_share(false));
+}
