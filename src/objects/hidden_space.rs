@@ -138,10 +138,7 @@ impl HiddenSpace {
         let n = CELLS_PER_AXIS;
         let cell_size = object_box.extents() / n as f32;
         let margin_m = 0.5 * cell_size.norm();
-        let corner = Point3::from(-object_box.half_extents);
-        let centre_of = |i: usize, j: usize, k: usize| {
-            corner + cell_size.component_mul(&Vector3::new(i as f32 + 0.5, j as f32 + 0.5, k as f32 + 0.5))
-        };
+        let centre_of = |i: usize, j: usize, k: usize| cell_centre(object_box, [i, j, k].map(|a| a as isize));
         let mut evidence = Vec::with_capacity(n * n * n);
         for k in 0..n {
             for j in 0..n {
@@ -212,15 +209,16 @@ impl HiddenSpace {
     }
 
     /// A point drawn near a cell seen free, an open cell or a ring cell beyond the box (world
-    /// frame, one cell drawn uniformly from all), `None` when there is none: in the span [`FREE_DRAW_SPREAD`] × the cell's edges
-    /// around its centre, checked against `views`. No point is kept that a view sees within
-    /// [`FREE_CLEARANCE_M`] of the object's surface: the keyframe rays' surface samples teach the
-    /// surface, and free draws packed around a lamp's 2.6 cm pole (the cells beside it are seen
-    /// free) outweigh the few rays that hit it. A view saw a seen-free cell's centre free, by the
-    /// cell's half diagonal before the surface on the centre's pixel; the span's other points lie
-    /// on other pixels, which may see something nearer: a point around a seen-free centre is kept
-    /// only when a view also sees it free by [`GLIMPSE_MARGIN_M`]. No view saw into an open cell.
-    /// After [`FREE_DRAW_TRIES`] misses the centre itself is taken.
+    /// frame, one cell drawn uniformly from all), `None` when there is none: in the span
+    /// [`FREE_DRAW_SPREAD`] × the cell's edges around its centre, checked against `views`.
+    /// No point is kept that a view sees within [`FREE_CLEARANCE_M`] of the object's surface:
+    /// the keyframe rays' surface samples teach the surface, and free draws packed around a
+    /// lamp's 2.6 cm pole (the cells beside it are seen free) outweigh the few rays that hit it.
+    /// A view saw a seen-free cell's centre free, by the cell's half diagonal before the surface
+    /// on the centre's pixel; the span's other points lie on other pixels, which may see
+    /// something nearer: a point around a seen-free centre is kept only when a view also sees it
+    /// free by [`GLIMPSE_MARGIN_M`]. No view saw into an open or ring cell. After
+    /// [`FREE_DRAW_TRIES`] misses the centre itself is taken.
     pub fn draw_free(&self, views: &[&ObjectView], rng: &mut impl Rng) -> Option<Point3<f32>> {
         let (seen, open) = (self.free_centres.len(), self.open_centres.len());
         let all = seen + open + self.beyond_centres.len();
@@ -281,6 +279,14 @@ impl HiddenSpace {
     }
 }
 
+/// The centre (box frame) of cell `(i, j, k)` of `object_box`'s grid of [`CELLS_PER_AXIS`]³
+/// cells; indices outside `0..CELLS_PER_AXIS` name cells beyond the box.
+fn cell_centre(object_box: &OrientedBox, [i, j, k]: [isize; 3]) -> Point3<f32> {
+    let cell_size = object_box.extents() / CELLS_PER_AXIS as f32;
+    let index = Vector3::new(i as f32 + 0.5, j as f32 + 0.5, k as f32 + 0.5);
+    Point3::from(-object_box.half_extents) + cell_size.component_mul(&index)
+}
+
 /// Centres (box frame of the upright `object_box`, cells of its grid) of the ring one cell
 /// thick around its sides and top whose evidence in `views` is hidden or glimpsed, and whose
 /// image across `mirror` is outside the box ([`FreeCells::SeenOpenAndBeyond`]).
@@ -291,8 +297,6 @@ fn ring_cells_beyond(
     margin_m: f32,
 ) -> Vec<Point3<f32>> {
     let n = CELLS_PER_AXIS as isize;
-    let cell_size = object_box.extents() / CELLS_PER_AXIS as f32;
-    let corner = Point3::from(-object_box.half_extents);
     let inside = |a: isize| (0..n).contains(&a);
     let mut centres = Vec::new();
     for k in 0..=n {
@@ -301,8 +305,7 @@ fn ring_cells_beyond(
                 if inside(i) && inside(j) && inside(k) {
                     continue;
                 }
-                let centre =
-                    corner + cell_size.component_mul(&Vector3::new(i as f32 + 0.5, j as f32 + 0.5, k as f32 + 0.5));
+                let centre = cell_centre(object_box, [i, j, k]);
                 let world = object_box.world_from_box * centre;
                 if mirror.is_some_and(|plane| object_box.contains(&plane.reflect(&world), 0.0)) {
                     continue;
@@ -388,3 +391,7 @@ mod tests;
 #[cfg(test)]
 #[path = "hidden_space_draw_tests.rs"]
 mod draw_tests;
+
+#[cfg(test)]
+#[path = "hidden_space_beyond_tests.rs"]
+mod beyond_tests;
