@@ -22,8 +22,9 @@
 //!
 //! A hidden cell whose walk sideways (along box x or y, through hidden cells) ends at a cell seen
 //! free, glimpsed or occluded opens sideways ([`EvidenceGrid::open_sideways`]); one whose walk
-//! ends at a cell seen free or glimpsed under the object's observed surface continues space seen
-//! under the object ([`EvidenceGrid::opens_under_the_object`]).
+//! ends at a cell seen free or glimpsed under the object (its observed surface, or space hidden
+//! behind it, above) continues space seen under the object
+//! ([`EvidenceGrid::opens_under_the_object`]).
 
 use nalgebra::Point3;
 
@@ -81,14 +82,17 @@ impl EvidenceGrid {
     }
 
     /// Whether hidden cell (i, j, k) continues space seen under the object: a walk ends at a
-    /// cell seen free or glimpsed with the object's observed surface above it (under a top, a
-    /// frame, an apron). Space behind another object may hold that object, and space seen beside
-    /// the object (past the end of a sofa's back, above its arm) says nothing of the hidden cells
-    /// inside it, which the walk crosses when a cell's evidence misses the object's end face.
+    /// cell seen free or glimpsed with the object above it — a cell at its observed surface (a
+    /// top, a frame, an apron) or hidden behind it (a sofa's body over the floor seen under its
+    /// front edge: the body's front face is a row of cells nearer the view). Space behind
+    /// another object may hold that object, and space seen beside the object (past the end of a
+    /// sofa's back, above its arm) says nothing of the hidden cells inside it, which the walk
+    /// crosses when a cell's evidence misses the object's end face.
     pub(super) fn opens_under_the_object(&self, i: usize, j: usize, k: usize) -> bool {
         self.walk_ends(i, j, k).any(|(x, y)| {
             matches!(self.at(x, y, k), CellEvidence::SeenFree | CellEvidence::Glimpsed)
-                && (k + 1..self.n).any(|above| self.at(x, y, above) == CellEvidence::Surface)
+                && (k + 1..self.n)
+                    .any(|above| matches!(self.at(x, y, above), CellEvidence::Surface | CellEvidence::Hidden))
         })
     }
 }

@@ -84,7 +84,8 @@ pub enum FreeCells {
     Seen,
     /// Those, and the hidden cells open sideways onto space a view saw
     /// through under the object (walking along box x or y through hidden cells, a walk ends at a
-    /// cell seen free or glimpsed with the object's observed surface above it).
+    /// cell seen free or glimpsed with the object's observed surface, or space hidden behind it,
+    /// above it).
     SeenAndOpen,
     /// Those, and the cells of the ring one cell thick around the box's sides and top that no
     /// view saw free and none saw at the object's surface or behind another object — hidden

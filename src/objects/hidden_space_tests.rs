@@ -360,3 +360,71 @@ fn space_seen_beside_the_object_does_not_open_its_inside() {
         .count();
     assert_eq!(drawn_free, 0, "cells inside the back drawn free");
 }
+
+#[test]
+fn the_gap_under_a_body_seen_under_its_front_edge_opens_to_its_back() {
+    // A sofa (the object) on 8 cm legs against a wall: its body over [−1, 1] × [1, 1.9], 8–80
+    // cm high. A low view from the front sees the floor under the front part of the body; the
+    // cells there are seen free, and above them lies the body, hidden behind its front face (the
+    // face itself is a row of cells away). The hidden cells under the back part open onto them:
+    // the space seen under the object continues behind it, under the body.
+    let object = |min, max| Solid {
+        aabb: aabb(min, max),
+        is_object: true,
+    };
+    let other = |min, max| Solid {
+        aabb: aabb(min, max),
+        is_object: false,
+    };
+    let mut scene = vec![
+        object([-1.0, 1.0, 0.08], [1.0, 1.9, 0.8]),
+        other([-5.0, -5.0, -0.1], [5.0, 5.0, 0.0]),
+        other([-5.0, 1.95, 0.0], [5.0, 2.0, 2.0]),
+    ];
+    for (x, y) in [(-1.0, 1.0), (0.94, 1.0), (-1.0, 1.84), (0.94, 1.84)] {
+        scene.push(object([x, y, 0.0], [x + 0.06, y + 0.06, 0.08]));
+    }
+    let sofa_box = aabb([-1.0, 1.0, 0.0], [1.0, 1.9, 0.8]);
+    let views = [
+        render_pitched([0.0, -1.2, 0.4], 0.0, -0.15, &scene),
+        render_pitched([-0.8, -1.0, 0.45], -0.3, -0.15, &scene),
+    ];
+    let views: Vec<&ObjectView> = views.iter().collect();
+    let rules = CellRules {
+        hidden: HiddenCells::Enclosed,
+        free: FreeCells::SeenAndOpen,
+    };
+    let space = HiddenSpace::of_views(&views, &sofa_box, None, rules);
+    let world =
+        |cells: &[Point3<f32>]| -> Vec<Point3<f32>> { cells.iter().map(|c| space.world_from_box * c).collect() };
+    let (free, open, solid) = (
+        world(&space.free_centres),
+        world(&space.open_centres),
+        world(&space.centres),
+    );
+    let under_the_front = |p: &&Point3<f32>| p.z < 0.05 && p.y < 1.3;
+    let under_the_back = |p: &&Point3<f32>| p.z < 0.05 && p.y > 1.5;
+    assert!(
+        free.iter().filter(under_the_front).count() > 10,
+        "the floor seen under the front edge"
+    );
+    assert_eq!(
+        free.iter().filter(under_the_back).count(),
+        0,
+        "no view reaches under the back"
+    );
+    assert!(
+        open.iter().filter(under_the_back).count() > 20,
+        "the gap under the back joins the seen-free prior: {} open cells there",
+        open.iter().filter(under_the_back).count()
+    );
+    assert!(!solid.iter().any(|p| p.z < 0.05), "no solid cell in the gap");
+    assert!(
+        !free.iter().chain(&open).any(|p| p.z > 0.1 && p.y > 1.1 && p.y < 1.85),
+        "no free draw inside the body"
+    );
+    assert!(
+        solid.iter().filter(|p| p.z > 0.1).count() > 100,
+        "the body's inside stays solid"
+    );
+}
