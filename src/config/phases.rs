@@ -35,9 +35,9 @@ impl MapperConfig {
     /// unset).
     pub const CARVING_SAMPLES: usize = 3;
 
-    /// Solid-prior and seen-free-prior rays per step of the `fast` schedule's object sampler
-    /// (`fields.object_rays.hidden_solid_rays` / `seen_free_rays` unset), for objects alone in
-    /// their class.
+    /// Solid-prior, seen-free-prior and support-prior rays per step of the `fast` schedule's
+    /// object sampler (`fields.object_rays.hidden_solid_rays` / `seen_free_rays` /
+    /// `below_support_rays` unset), for objects alone in their class.
     pub const PRIOR_RAYS: usize = 8;
 
     /// Mirrored rays per step of the `fast` schedule's object sampler
@@ -76,7 +76,7 @@ impl MapperConfig {
         self.fields
             .object_rays
             .with_default_carving(carving)
-            .with_default_priors(priors, priors)
+            .with_default_priors([priors; 3])
             .with_default_mirror_rays(mirror)
             .with_default_own_pixel_draws(own)
     }
@@ -202,20 +202,29 @@ mod tests {
                 rays.carving_samples(),
                 rays.solid_prior_rays(),
                 rays.seen_free_rays(),
+                rays.below_support_rays(),
                 rays.own_pixel_draws(),
             )
         };
-        assert_eq!(sampler(SchedulePolicy::Fast), (3, 8, 8, 8));
+        assert_eq!(sampler(SchedulePolicy::Fast), (3, 8, 8, 8, 8));
         assert_eq!(
             sampler(SchedulePolicy::Paper),
-            (0, 0, 0, 0),
+            (0, 0, 0, 0, 0),
             "the paper's sampler, no priors"
         );
         let mut off = config(SchedulePolicy::Fast, Protocol::Online, Fields::Category);
         off.fields.object_rays.hidden_solid_rays = Some(0);
         off.fields.object_rays.seen_free_rays = Some(2);
+        off.fields.object_rays.below_support_rays = Some(0);
         let rays = off.object_rays();
-        assert_eq!((rays.solid_prior_rays(), rays.seen_free_rays()), (0, 2));
+        assert_eq!(
+            (
+                rays.solid_prior_rays(),
+                rays.seen_free_rays(),
+                rays.below_support_rays()
+            ),
+            (0, 2, 0)
+        );
         let offline = config(SchedulePolicy::Fast, Protocol::Offline, Fields::Category).object_rays();
         assert_eq!(offline.solid_prior_rays(), 0, "offline runs the paper's protocol");
         assert_eq!(offline.own_pixel_draws(), 0);

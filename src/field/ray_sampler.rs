@@ -83,7 +83,7 @@ pub fn sample_window_rays(
     }
     let counts = PriorRays {
         hidden_solid: cfg.solid_prior_rays(),
-        below_support: cfg.below_support_rays,
+        below_support: cfg.below_support_rays(),
         seen_free: cfg.seen_free_rays(),
         weight: cfg.hidden_solid_weight,
     };

@@ -39,8 +39,10 @@ pub struct RaySamplerConfig {
     /// Which hidden cells the solid prior draws from.
     pub hidden_cells: HiddenCells,
     /// Prior rays per step under the object's box, below the lowest point it was seen at, each
-    /// sample asked to be empty (what the object stands on); 0: none.
-    pub below_support_rays: usize,
+    /// sample asked to be empty (what the object stands on: the region it is meshed in reaches
+    /// below the floor). `None`: the schedule's choice ([`RaySamplerConfig::below_support_rays`]);
+    /// 0: none.
+    pub below_support_rays: Option<usize>,
     /// Prior rays per step around the centres of the cells of the object's box that a view saw
     /// free, each sample asked to be empty. `None`: the schedule's choice; 0: none.
     pub seen_free_rays: Option<usize>,
@@ -77,7 +79,7 @@ impl RaySamplerConfig {
         behind_occluder_m: 0.05,
         hidden_solid_rays: None,
         hidden_cells: HiddenCells::Enclosed,
-        below_support_rays: 0,
+        below_support_rays: None,
         seen_free_rays: None,
         free_cells: FreeCells::SeenOpenAndBeyond,
         mirror_rays: None,
@@ -96,7 +98,7 @@ impl RaySamplerConfig {
         behind_occluder_m: 0.05,
         hidden_solid_rays: None,
         hidden_cells: HiddenCells::Enclosed,
-        below_support_rays: 0,
+        below_support_rays: None,
         seen_free_rays: None,
         free_cells: FreeCells::SeenAndOpen,
         mirror_rays: None,
@@ -131,6 +133,11 @@ impl RaySamplerConfig {
         self.seen_free_rays.unwrap_or(0)
     }
 
+    /// The support prior's rays per step (unset: none, as for the solid prior).
+    pub fn below_support_rays(&self) -> usize {
+        self.below_support_rays.unwrap_or(0)
+    }
+
     /// The pixels per keyframe drawn among the object's own (unset: none, as for the solid
     /// prior).
     pub fn own_pixel_draws(&self) -> usize {
@@ -160,10 +167,12 @@ impl RaySamplerConfig {
         self
     }
 
-    /// The same sampler with unset prior ray counts set to `solid` and `seen_free`.
-    pub fn with_default_priors(mut self, solid: usize, seen_free: usize) -> Self {
+    /// The same sampler with unset prior ray counts set: the solid prior's, the seen-free
+    /// prior's and the support prior's rays per step.
+    pub fn with_default_priors(mut self, [solid, seen_free, below_support]: [usize; 3]) -> Self {
         self.hidden_solid_rays.get_or_insert(solid);
         self.seen_free_rays.get_or_insert(seen_free);
+        self.below_support_rays.get_or_insert(below_support);
         self
     }
 

@@ -49,7 +49,7 @@ fn config() -> MapperConfig {
     // The priors of objects without a twin, whose hidden cells are not checkpointed but
     // recomputed from the restored keyframes and boxes.
     config.fields.object_rays.hidden_solid_rays = Some(4);
-    config.fields.object_rays.below_support_rays = 2;
+    config.fields.object_rays.below_support_rays = Some(2);
     config.fields.object_rays.seen_free_rays = Some(2);
     config
 }
