@@ -94,6 +94,28 @@ impl MeshSource {
     }
 }
 
+/// Whether other objects share a field's class.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ClassShare {
+    /// An object alone in its class: nothing completes it but its own field and the priors,
+    /// and it trains at least `schedule.plateau.min_steps_alone` steps.
+    Alone,
+    /// Objects with twins, and category fields.
+    Shared,
+}
+
+impl ClassShare {
+    /// The share of an object whose class holds `class_size` objects, itself included (see
+    /// [`takes_shape_priors`]).
+    pub fn of_class_size(class_size: usize) -> Self {
+        if takes_shape_priors(class_size) {
+            Self::Alone
+        } else {
+            Self::Shared
+        }
+    }
+}
+
 /// Whether an object's field takes the priors of objects without a twin (the solid prior,
 /// `objects::hidden_space`): only when no other object shares its class (`class_size`: the
 /// objects of its class, itself included). Objects with twins are completed from them by a
@@ -144,6 +166,8 @@ pub struct FieldFacts {
     pub sighting: Sighting,
     /// Whether frames still stream in.
     pub phase: StreamPhase,
+    /// Whether other objects share its class.
+    pub class: ClassShare,
 }
 
 /// The facts of object `id`'s own field.
@@ -153,12 +177,14 @@ pub fn object_field_facts(
     mesh: MeshSource,
     phase: StreamPhase,
     this_tick: &[FrameIndex],
+    class: ClassShare,
 ) -> FieldFacts {
     FieldFacts {
         key: FieldKey::Object(id),
         role: FieldRole::of_object_field(mesh, phase),
         sighting: Sighting::of(last_seen, this_tick),
         phase,
+        class,
     }
 }
 
@@ -179,6 +205,7 @@ pub fn category_field_facts(
         role: FieldRole::Learning,
         sighting,
         phase,
+        class: ClassShare::Shared,
     }
 }
 
@@ -246,6 +273,7 @@ mod tests {
                 role: FieldRole::Learning,
                 sighting: Sighting::Seen,
                 phase: StreamPhase::Streaming,
+                class: ClassShare::Shared,
             }
         );
         let facts = object_field_facts(
@@ -254,6 +282,7 @@ mod tests {
             MeshSource::CategoryField,
             StreamPhase::Streaming,
             &tick,
+            ClassShare::Shared,
         );
         assert_eq!(
             (facts.role, facts.sighting),

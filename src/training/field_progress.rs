@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::facts::{FieldFacts, FieldRole, Sighting, StreamPhase};
+use super::facts::{ClassShare, FieldFacts, FieldRole, Sighting, StreamPhase};
 use super::plateau::{LossWindow, PlateauConfig};
 
 /// Why a field is (not) training, as of the latest plan.
@@ -61,7 +61,9 @@ impl FieldProgress {
             (FieldRole::Supporting, Sighting::NewKeyframe) => FieldState::Training,
             (FieldRole::Supporting, _) => FieldState::Waiting,
             (FieldRole::Learning, Sighting::Seen | Sighting::NewKeyframe) => FieldState::Training,
-            (FieldRole::Learning, Sighting::Unseen) if self.window.has_plateaued(plateau) => {
+            (FieldRole::Learning, Sighting::Unseen)
+                if self.window.has_plateaued(plateau) && !self.below_minimum(facts, plateau) =>
+            {
                 if facts.phase == StreamPhase::Ended && self.decays < plateau.learning_rate_decays {
                     self.decays += 1;
                     self.window.clear();
@@ -72,6 +74,12 @@ impl FieldProgress {
             }
             (FieldRole::Learning, Sighting::Unseen) => FieldState::Training,
         }
+    }
+
+    /// Whether the field has taken fewer steps than its class share asks before it may converge
+    /// ([`PlateauConfig::min_steps_alone`] for an object alone in its class, none otherwise).
+    fn below_minimum(&self, facts: &FieldFacts, plateau: &PlateauConfig) -> bool {
+        facts.class == ClassShare::Alone && self.steps < plateau.min_steps_alone
     }
 
     /// Records the loss of a step it took.

@@ -25,6 +25,12 @@ pub struct PlateauConfig {
     pub learning_rate_decays: u32,
     /// The factor of each decay (in (0, 1]).
     pub learning_rate_decay: f32,
+    /// Steps the field of an object alone in its class takes before its loss may count as
+    /// plateaued. Seen in a few frames only (a lamp at the edge of the first views), such a field
+    /// reaches a plateau of its total loss in a few hundred steps, before its thin parts (a pole
+    /// seen in two keyframes) have formed; no category field completes it later. Objects with
+    /// twins and category fields converge at their first plateau.
+    pub min_steps_alone: u64,
 }
 
 impl Default for PlateauConfig {
@@ -34,6 +40,7 @@ impl Default for PlateauConfig {
             min_relative_drop: 0.01,
             learning_rate_decays: 2,
             learning_rate_decay: 0.3,
+            min_steps_alone: 2000,
         }
     }
 }
@@ -102,6 +109,7 @@ mod tests {
         min_relative_drop: 0.05,
         learning_rate_decays: 0,
         learning_rate_decay: 1.0,
+        min_steps_alone: 0,
     };
 
     fn window(losses: &[f32]) -> LossWindow {

@@ -2,13 +2,14 @@
 
 use super::*;
 use crate::ids::ObjectId;
-use crate::training::facts::{FieldRole, Sighting, StreamPhase};
+use crate::training::facts::{ClassShare, FieldRole, Sighting, StreamPhase};
 
 const PLATEAU: PlateauConfig = PlateauConfig {
     window_steps: 3,
     min_relative_drop: 0.05,
     learning_rate_decays: 0,
     learning_rate_decay: 1.0,
+    min_steps_alone: 0,
 };
 
 fn object(id: u32, role: FieldRole, sighting: Sighting) -> FieldFacts {
@@ -17,6 +18,7 @@ fn object(id: u32, role: FieldRole, sighting: Sighting) -> FieldFacts {
         role,
         sighting,
         phase: StreamPhase::Streaming,
+        class: ClassShare::Shared,
     }
 }
 
@@ -54,6 +56,38 @@ fn a_converged_field_gets_no_steps_until_it_is_seen_again() {
         scheduler.plan(&seen, SchedulePolicy::Fast, &PLATEAU),
         [FieldKey::Object(ObjectId(1))],
         "seen in the new frame: it trains again"
+    );
+}
+
+#[test]
+fn the_field_of_an_object_alone_in_its_class_does_not_converge_before_its_minimum_steps() {
+    let plateau = PlateauConfig {
+        min_steps_alone: 15,
+        ..PLATEAU
+    };
+    let steps_of = |class| {
+        let mut scheduler = StepScheduler::default();
+        let unseen = [FieldFacts {
+            class,
+            ..object(1, FieldRole::Learning, Sighting::Unseen)
+        }];
+        for _ in 0..40 {
+            for key in scheduler.plan(&unseen, SchedulePolicy::Fast, &plateau) {
+                scheduler.record(key, 1.0, &plateau);
+            }
+        }
+        let progress = &scheduler.progress()[&FieldKey::Object(ObjectId(1))];
+        (progress.steps, progress.state, progress.converged_at)
+    };
+    assert_eq!(
+        steps_of(ClassShare::Alone),
+        (15, FieldState::Converged, Some(15)),
+        "a flat loss plateaus after 6 steps; alone in its class, the field trains on to 15"
+    );
+    assert_eq!(
+        steps_of(ClassShare::Shared),
+        (6, FieldState::Converged, Some(6)),
+        "with twins it converges at its first plateau"
     );
 }
 
@@ -135,6 +169,7 @@ fn the_paper_policy_trains_every_field_on_every_step() {
             role: FieldRole::Learning,
             sighting: Sighting::Unseen,
             phase: StreamPhase::Ended,
+            class: ClassShare::Shared,
         },
     ];
     for _ in 0..20 {

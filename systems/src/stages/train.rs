@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use catmap::meshing::ObjectMeshConfig;
 use catmap::objects::hidden_space::HiddenSpaceCache;
 use catmap::training::{
-    BatchPlan, FieldFacts, MeshSource, StreamPhase, class_sizes, object_field_facts, takes_shape_priors,
+    BatchPlan, ClassShare, FieldFacts, MeshSource, StreamPhase, class_sizes, object_field_facts, takes_shape_priors,
 };
 use catmap::{FrameIndex, ObjectId};
 use std::collections::HashMap;
@@ -114,13 +114,13 @@ pub fn train_fields(
     let _timer = times.start("train");
     let (config, cfg, schedule, fields) = (&settings.0, &settings.0.fields, &mut *schedule, &mut *fields);
     let tick: Vec<FrameIndex> = frames.iter().map(|f| f.0.index).collect();
-    let facts = object_facts(&owners, progress.phase(), &tick);
+    let class_sizes = class_sizes(categories.iter().map(|c| &c.members[..]));
+    let facts = object_facts(&owners, progress.phase(), &tick, &class_sizes);
     let plan = schedule
         .scheduler
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
     schedule.planned_objects = plan.indices.len();
     let object_rays = config.object_rays();
-    let class_sizes = class_sizes(categories.iter().map(|c| &c.members[..]));
     for _ in 0..std::mem::take(&mut queue.pending) {
         if !plan.indices.is_empty() {
             let step = train_one(
@@ -144,14 +144,22 @@ pub fn train_fields(
     }
 }
 
-/// The step scheduler's facts of every object field (the background's are not planned).
-fn object_facts(owners: &FieldOwners, phase: StreamPhase, tick: &[FrameIndex]) -> Vec<(usize, FieldFacts)> {
+/// The step scheduler's facts of every object field (the background's are not planned);
+/// `class_sizes` are the objects of each object's class.
+fn object_facts(
+    owners: &FieldOwners,
+    phase: StreamPhase,
+    tick: &[FrameIndex],
+    class_sizes: &HashMap<ObjectId, usize>,
+) -> Vec<(usize, FieldFacts)> {
     owners
         .iter()
         .filter_map(|(_, object, latest, member, _, _, slot, ..)| {
+            let id = object?.id;
             let last_seen = latest.map(LatestBox::last_seen);
             let mesh = MeshSource::of_category_member(member);
-            Some((slot.index, object_field_facts(object?.id, last_seen, mesh, phase, tick)))
+            let class = ClassShare::of_class_size(class_sizes.get(&id).copied().unwrap_or(1));
+            Some((slot.index, object_field_facts(id, last_seen, mesh, phase, tick, class)))
         })
         .collect()
 }
