@@ -20,8 +20,8 @@
 //! prior's samples lie under the box ([`HiddenSpace::draw_below_support`]).
 //!
 //! Hidden cells that open sideways onto space a view saw through (seen free or glimpsed) under
-//! the object's observed surface are **open**: the space under a tabletop's apron, between
-//! legs, under a bed's frame. Under [`FreeCells::SeenAndOpen`] they join the seen-free prior's
+//! the object are **open**: the space under a tabletop's apron, between legs, under a bed's
+//! frame or a sofa's body. Under [`FreeCells::SeenAndOpen`] they join the seen-free prior's
 //! cells (a glimpsed cell does not: the view saw its centre free, not the span its draws
 //! cover): what continues space seen empty, behind nothing but the object's own top, is asked to
 //! be empty (the field left to itself extends the top into a slab).
@@ -82,10 +82,9 @@ pub enum HiddenCells {
 pub enum FreeCells {
     /// The cells a view saw free.
     Seen,
-    /// Those, and the hidden cells open sideways onto space a view saw
-    /// through under the object (walking along box x or y through hidden cells, a walk ends at a
-    /// cell seen free or glimpsed with the object's observed surface, or space hidden behind it,
-    /// above it).
+    /// Those, and the hidden cells open sideways onto space a view saw through under the object
+    /// (a walk along box x or y through hidden cells ends at a cell seen free or glimpsed with
+    /// the object above it: its observed surface, or space hidden behind it).
     SeenAndOpen,
     /// Those, and the cells of the ring one cell thick around the box's sides and top that no
     /// view saw free and none saw at the object's surface or behind another object — hidden
@@ -390,9 +389,11 @@ impl HiddenSpaceCache {
 mod tests;
 
 #[cfg(test)]
-#[path = "hidden_space_draw_tests.rs"]
-mod draw_tests;
-
-#[cfg(test)]
 #[path = "hidden_space_beyond_tests.rs"]
 mod beyond_tests;
+#[cfg(test)]
+#[path = "hidden_space_draw_tests.rs"]
+mod draw_tests;
+#[cfg(test)]
+#[path = "hidden_space_open_tests.rs"]
+mod open_tests;
