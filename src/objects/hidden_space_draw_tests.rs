@@ -3,21 +3,10 @@
 
 use nalgebra::Point3;
 
+use super::tests::{ALL, ENCLOSED};
 use super::*;
 use crate::objects::view_fixtures::{Solid, aabb, render, slab_and_box};
 use crate::rng::{RngStream, seeded_rng};
-
-/// Every hidden cell solid, free draws around the cells seen free only.
-const ALL: CellRules = CellRules {
-    hidden: HiddenCells::All,
-    free: FreeCells::Seen,
-};
-
-/// Enclosed hidden cells solid, free draws around the cells seen free only.
-const ENCLOSED: CellRules = CellRules {
-    hidden: HiddenCells::Enclosed,
-    free: FreeCells::Seen,
-};
 
 #[test]
 fn drawn_points_lie_in_hidden_cells() {

@@ -3,21 +3,10 @@
 
 use nalgebra::Point3;
 
+use super::tests::{ALL, ENCLOSED};
 use super::*;
 use crate::objects::cell_evidence::{CellEvidence, cell_evidence};
 use crate::objects::view_fixtures::{Solid, aabb, bed_on_the_floor, bed_views, render_pitched};
-
-/// Enclosed hidden cells solid, free draws around the cells seen free only.
-const ENCLOSED: CellRules = CellRules {
-    hidden: HiddenCells::Enclosed,
-    free: FreeCells::Seen,
-};
-
-/// Every hidden cell solid, free draws around the cells seen free only.
-const ALL: CellRules = CellRules {
-    hidden: HiddenCells::All,
-    free: FreeCells::Seen,
-};
 
 #[test]
 fn the_floor_glimpsed_under_a_frame_opens_the_gap_and_only_the_gap() {

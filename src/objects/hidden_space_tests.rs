@@ -7,13 +7,13 @@ use crate::rng::{RngStream, seeded_rng};
 
 /// Every hidden cell solid, free draws around the cells seen free only (the rules before open
 /// cells).
-const ALL: CellRules = CellRules {
+pub(super) const ALL: CellRules = CellRules {
     hidden: HiddenCells::All,
     free: FreeCells::Seen,
 };
 
 /// Enclosed hidden cells solid, free draws around the cells seen free only.
-const ENCLOSED: CellRules = CellRules {
+pub(super) const ENCLOSED: CellRules = CellRules {
     hidden: HiddenCells::Enclosed,
     free: FreeCells::Seen,
 };
