@@ -5,3 +5,4 @@ pub mod mesh;
 pub mod mirror_symmetry;
 pub mod nearest;
 pub mod oriented_box;
+pub mod tracked_nearest;

@@ -13,6 +13,7 @@ use crate::error::{CatmapError, Result};
 /// A fixed set of reference points that answers nearest-distance queries.
 pub struct PointIndex {
     tree: ImmutableKdTree<f32, 3>,
+    points: Vec<[f32; 3]>,
 }
 
 impl std::fmt::Debug for PointIndex {
@@ -35,7 +36,7 @@ impl PointIndex {
         let raw: Vec<[f32; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
         let tree = ImmutableKdTree::new_from_slice(&raw)
             .map_err(|e| CatmapError::Degenerate(format!("cannot build a k-d tree: {e:?}")))?;
-        Ok(Self { tree })
+        Ok(Self { tree, points: raw })
     }
 
     /// Distance from `p` to the closest indexed point.
@@ -70,6 +71,37 @@ impl PointIndex {
             .nearest_one::<SquaredEuclidean<f32>>()
             .execute();
         (hit.item as usize, hit.distance)
+    }
+
+    /// The closest point to `p` as [`Self::nearest`] answers it, its squared distance, and the
+    /// squared distance to the second closest (infinite with one point indexed).
+    pub fn nearest_two(&self, p: &Point3<f32>) -> (usize, f32, f32) {
+        let two = std::num::NonZeroUsize::MIN.saturating_add(1);
+        let hits = self
+            .tree
+            .query(&[p.x, p.y, p.z])
+            .nearest_n::<SquaredEuclidean<f32>>(two)
+            .execute();
+        match hits.as_slice() {
+            [first, second, ..] if first.distance < second.distance => {
+                (first.item as usize, first.distance, second.distance)
+            }
+            [_, second, ..] => {
+                // Two at one distance: the one the plain query picks.
+                let (nearest, d2) = self.nearest(p);
+                (nearest, d2, second.distance)
+            }
+            _ => {
+                let (nearest, d2) = self.nearest(p);
+                (nearest, d2, f32::INFINITY)
+            }
+        }
+    }
+
+    /// The `i`-th indexed point.
+    pub fn point(&self, i: usize) -> Point3<f32> {
+        let [x, y, z] = self.points[i];
+        Point3::new(x, y, z)
     }
 
     /// Indices of the points within `radius` of `p` (inclusive), in increasing index order.

@@ -10,11 +10,15 @@
 //! `f32` (a resolution of about 1e-7 m per metre of distance from the origin), so a tolerance
 //! much below 1e-6 is met only when the pairs repeat exactly; pairs that alternate between two
 //! sets go on to the cap. 1e-5 (10 µm) is far below the clouds' voxels (centimetres).
+//!
+//! The nearest template points come from a [`TrackedNearest`]: the same answers as a query per
+//! point and iteration, but the k-d tree is asked only when a point moved enough to change them.
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
 
 use super::horn::weighted_rigid;
 use crate::geometry::nearest::PointIndex;
+use crate::geometry::tracked_nearest::TrackedNearest;
 
 /// Parameters of [`icp_point_to_point`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -105,15 +109,15 @@ pub fn icp_point_to_point(
         correspondences: 0,
         stop: IcpStop::IterationCap,
     };
+    let mut nearest = TrackedNearest::new(source.len());
     for iteration in 0..params.max_iterations {
-        let moved: Vec<Point3<f32>> = source.iter().map(|p| (current * p.cast::<f64>()).cast()).collect();
         let mut pairs: Vec<(f32, usize, usize)> = source
             .iter()
-            .zip(&moved)
             .enumerate()
-            .filter_map(|(i, (_, moved_p))| {
-                let (j, d2) = template_index.nearest(moved_p);
-                (d2 <= max_d2).then_some((d2, i, j))
+            .filter_map(|(i, p)| {
+                let moved: Point3<f32> = (current * p.cast::<f64>()).cast();
+                let (j, d2) = nearest.nearest_within(i, &moved, template_index, max_d2)?;
+                Some((d2, i, j))
             })
             .collect();
         let keep = kept_count(pairs.len(), params.keep_fraction);
