@@ -93,10 +93,9 @@ pub struct IcpResult {
 }
 
 /// Refines `initial` (template_from_source) by point-to-point ICP of `source` against the
-/// template indexed by `template_index` (over `template`).
+/// template indexed by `template_index`.
 pub fn icp_point_to_point(
     source: &[Point3<f32>],
-    template: &[Point3<f32>],
     template_index: &PointIndex,
     initial: Isometry3<f64>,
     params: &IcpParams,
@@ -129,7 +128,7 @@ pub fn icp_point_to_point(
         let a: Vec<_> = pairs.iter().map(|&(_, i, _)| source[i].coords.cast::<f64>()).collect();
         let b: Vec<_> = pairs
             .iter()
-            .map(|&(_, _, j)| template[j].coords.cast::<f64>())
+            .map(|&(_, _, j)| template_index.point(j).coords.cast::<f64>())
             .collect();
         result.correspondences = a.len();
         if a.len() < 3 {
@@ -192,7 +191,7 @@ mod tests {
             keep_fraction: 1.0,
             step_tolerance: 1e-5,
         };
-        let fit = icp_point_to_point(&source, &template, &index, Isometry3::identity(), &params);
+        let fit = icp_point_to_point(&source, &index, Isometry3::identity(), &params);
         let error = fit.template_from_source * truth.inverse();
         assert!(
             error.translation.vector.norm() < 1e-4,
@@ -234,7 +233,7 @@ mod tests {
                 keep_fraction,
                 step_tolerance: 1e-5,
             };
-            let fit = icp_point_to_point(&source, &template, &index, Isometry3::identity(), &params);
+            let fit = icp_point_to_point(&source, &index, Isometry3::identity(), &params);
             (fit.template_from_source * truth.inverse()).translation.vector.norm()
         };
         assert!(run(1.0) > 5e-3, "the outliers pull plain ICP off");

@@ -241,7 +241,7 @@ impl Level {
         pose: Isometry3<f64>,
         params: &IcpParams,
     ) -> (Isometry3<f64>, IcpCounts) {
-        let fit = icp_point_to_point(source, &self.template, &self.index, pose, params);
+        let fit = icp_point_to_point(source, &self.index, pose, params);
         (fit.template_from_source, IcpCounts::of(&fit))
     }
 
