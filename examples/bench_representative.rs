@@ -17,7 +17,7 @@ use std::ops::ControlFlow;
 use catmap::categories::uncertainty::{RepresentativeChoice, choose_representative};
 use catmap::config::FieldConfig;
 use catmap::dataset::FrameSource;
-use catmap::dataset::classes::replica_name;
+use catmap::dataset::class_names::replica_class_name;
 use catmap::synth::{Preset, SyntheticScene};
 use catmap::{MapperConfig, ObjectId};
 use catmap_systems::Mapper;
@@ -83,7 +83,7 @@ fn check_scene(seed: u64, args: &Args) -> anyhow::Result<(usize, usize)> {
         if members.len() < 2 {
             continue;
         }
-        let name = class.name.as_deref().or(replica_name(class.class)).unwrap_or("?");
+        let name = class.name.as_deref().or(replica_class_name(class.class)).unwrap_or("?");
         let rays: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.reliable_rays.unwrap_or(0))).collect();
         // The class's representative by the uncertainty ranking (it draws nothing from the RNG).
         let ranked: Vec<(ObjectId, usize)> = rays.iter().map(|(id, n)| (*id, *n)).collect();

@@ -8,7 +8,7 @@
 use std::collections::BTreeMap;
 
 use catmap::dataset::FrameSource;
-use catmap::dataset::classes::replica_name;
+use catmap::dataset::class_names::replica_class_name;
 use catmap::synth::{Preset, SyntheticScene};
 use catmap::{MapperConfig, ObjectId};
 use catmap_systems::Mapper;
@@ -47,7 +47,7 @@ fn run(args: &Args) -> anyhow::Result<()> {
         let map = mapper.snapshot();
         let mut changes = Vec::new();
         for object in &map.objects {
-            let name = replica_name(object.class).unwrap_or("?");
+            let name = replica_class_name(object.class).unwrap_or("?");
             match previous.get(&object.id) {
                 None => changes.push(format!("new {name} {} ({} pts)", object.id, object.cloud_points)),
                 Some(&(points, keyframes)) => {
@@ -76,7 +76,7 @@ fn run(args: &Args) -> anyhow::Result<()> {
             .bounds
             .map(|b| b.extents())
             .map_or("-".to_owned(), |e| format!("{:.2} × {:.2} × {:.2}", e.x, e.y, e.z));
-        let name = replica_name(o.class).unwrap_or("?");
+        let name = replica_class_name(o.class).unwrap_or("?");
         say(&format!(
             "{:>6}  {name:<11} {:>6}  {:>6}  {extents}",
             o.id, o.visible_frames, o.cloud_points

@@ -43,25 +43,6 @@ pub fn is_replica_background(class: ClassId) -> bool {
     REPLICA_BACKGROUND.contains(&class.0)
 }
 
-/// A short human name for the Replica classes catmap knows, for tables and logs.
-pub fn replica_name(class: ClassId) -> Option<&'static str> {
-    Some(match class.0 {
-        7 => "bed",
-        15 => "box",
-        18 => "cabinet",
-        20 => "chair",
-        40 => "floor",
-        47 => "lamp",
-        54 => "nightstand",
-        71 => "shelf",
-        76 => "sofa",
-        78 => "stool",
-        80 => "table",
-        93 => "wall",
-        _ => return None,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

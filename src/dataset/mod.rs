@@ -2,6 +2,7 @@
 //! built-in synthetic scenes, all behind [`FrameSource`].
 
 pub mod camera_spec;
+pub mod class_names;
 pub mod classes;
 pub mod config;
 pub mod decode_guard;
@@ -12,6 +13,7 @@ pub mod resize;
 pub mod scannet;
 pub mod stream;
 
+use crate::dataset::class_names::ClassNames;
 use crate::error::Result;
 use crate::ids::FrameIndex;
 use crate::sensor::frame::{CameraIntrinsics, RgbdFrame};
@@ -31,6 +33,10 @@ pub trait FrameSource: Send + Sync {
     fn read_frame(&self, position: usize) -> Result<RgbdFrame>;
     /// Human-readable name for logs (usually the folder).
     fn name(&self) -> String;
+    /// The names of the sequence's classes (default: Replica's, which the synthetic scenes use).
+    fn class_names(&self) -> ClassNames {
+        ClassNames::replica()
+    }
 }
 
 impl<T: FrameSource + ?Sized> FrameSource for Box<T> {
@@ -45,6 +51,9 @@ impl<T: FrameSource + ?Sized> FrameSource for Box<T> {
     }
     fn name(&self) -> String {
         (**self).name()
+    }
+    fn class_names(&self) -> ClassNames {
+        (**self).class_names()
     }
 }
 

@@ -21,6 +21,7 @@ use crate::dataset::FrameSource;
 use crate::dataset::camera_spec::{
     intrinsics_problem, parse_numbers, read_intrinsics_json, world_from_camera_from_rows,
 };
+use crate::dataset::class_names::ClassNames;
 use crate::dataset::classes::REPLICA_BACKGROUND;
 use crate::dataset::config::DatasetConfig;
 use crate::dataset::images::{
@@ -74,6 +75,7 @@ pub struct ReplicaSequence {
     frames: Vec<ReplicaFrame>,
     depth_scale: f32,
     max_depth_m: f32,
+    class_names: ClassNames,
 }
 
 /// Bit `c` is set for every Replica background class `c` (all are below 128).
@@ -186,6 +188,7 @@ impl ReplicaSequence {
             .collect::<Vec<_>>();
         tracing::debug!(dir = %dir.display(), frames = frames.len(), ?intrinsics, "opened Replica sequence");
         Ok(Self {
+            class_names: ClassNames::find_replica(&dir),
             dir,
             intrinsics,
             frames,
@@ -227,6 +230,10 @@ fn decode_frame_images(
 impl FrameSource for ReplicaSequence {
     fn len(&self) -> usize {
         self.frames.len()
+    }
+
+    fn class_names(&self) -> ClassNames {
+        self.class_names.clone()
     }
 
     fn intrinsics(&self) -> CameraIntrinsics {

@@ -30,6 +30,7 @@ use crate::dataset::FrameSource;
 use crate::dataset::camera_spec::{
     intrinsics_problem, parse_numbers, read_intrinsic_matrix, world_from_camera_from_rows,
 };
+use crate::dataset::class_names::ClassNames;
 use crate::dataset::classes::SCANNET_BACKGROUND;
 use crate::dataset::images::{
     Image, check_depth_options, depth_to_metres_in_place, numbered_files, read_grey_as, read_rgb, read_size,
@@ -80,6 +81,7 @@ pub struct ScanNetSequence {
     intrinsics: CameraIntrinsics,
     frames: Vec<ScanNetFrame>,
     options: ScanNetOptions,
+    class_names: ClassNames,
 }
 
 fn is_background_label(label: u32) -> bool {
@@ -225,6 +227,7 @@ impl ScanNetSequence {
         }
         tracing::debug!(dir = %dir.display(), frames = frames.len(), ?intrinsics, "opened ScanNet sequence");
         Ok(Self {
+            class_names: ClassNames::find_scannet(&dir),
             dir,
             depth_size,
             first_depth,
@@ -288,6 +291,10 @@ impl ScanNetSequence {
 impl FrameSource for ScanNetSequence {
     fn len(&self) -> usize {
         self.frames.len()
+    }
+
+    fn class_names(&self) -> ClassNames {
+        self.class_names.clone()
     }
 
     fn intrinsics(&self) -> CameraIntrinsics {

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::furniture::Design;
 use super::preset::Preset;
 use super::scene::SyntheticScene;
-use crate::dataset::classes::replica_name;
+use crate::dataset::class_names::replica_class_name;
 
 /// Seed, preset and every object's ground truth.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -46,7 +46,7 @@ impl SceneDescription {
             .map(|o| ObjectDescription {
                 id: o.id.0,
                 class: o.class().0,
-                class_name: replica_name(o.class()).unwrap_or("unknown").to_owned(),
+                class_name: replica_class_name(o.class()).unwrap_or("unknown").to_owned(),
                 design: o.design,
                 world_from_object: row_major(&o.world_from_object),
                 observed_surface_fraction: observed.get(&o.id).copied().unwrap_or(0.0),

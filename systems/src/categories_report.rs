@@ -54,6 +54,7 @@ pub struct ClassRecord {
 
 /// Every class's subcategories, sorted by class.
 pub fn category_records(world: &mut World) -> Vec<ClassRecord> {
+    let names = world.resource::<crate::resources::DatasetClasses>().0.clone();
     let reliable: BTreeMap<ObjectId, usize> = world
         .query::<(&Object, &Reliability)>()
         .iter(world)
@@ -64,7 +65,7 @@ pub fn category_records(world: &mut World) -> Vec<ClassRecord> {
         .iter(world)
         .map(|(category, subcategories)| ClassRecord {
             class: category.class,
-            name: catmap::dataset::classes::replica_name(category.class).map(str::to_owned),
+            name: names.get(category.class).map(str::to_owned),
             subcategories: subcategories.map_or_else(Vec::new, |s| {
                 s.groups
                     .iter()

@@ -19,8 +19,8 @@ use crate::components::{
 use crate::recording::Rerun;
 use crate::resources::CategoryFields;
 use crate::resources::{
-    CategoryIndex, Fields, FinalMeshes, FrameInbox, ObjectIndex, Settings, SmallInstances, StageTimes, StreamProgress,
-    TrainingQueue, TrainingSchedule,
+    CategoryIndex, DatasetClasses, Fields, FinalMeshes, FrameInbox, ObjectIndex, Settings, SmallInstances, StageTimes,
+    StreamProgress, TrainingQueue, TrainingSchedule,
 };
 use crate::run_state::{CurrentPhase, LiveTicks, PhaseProgress, TickRecord};
 use crate::schedule::build_schedule;
@@ -93,6 +93,7 @@ impl Mapper {
         world.insert_resource(FrameInbox(inbox));
         world.init_resource::<StreamProgress>();
         world.init_resource::<ObjectIndex>();
+        world.init_resource::<DatasetClasses>();
         world.init_resource::<CategoryIndex>();
         world.init_resource::<StageTimes>();
         world.init_resource::<SmallInstances>();
@@ -121,6 +122,11 @@ impl Mapper {
         if let Some(mut live) = self.world.get_resource_mut::<LiveTicks>() {
             live.dropped = dropped;
         }
+    }
+
+    /// Names classes with `names` from now on (summary, Rerun labels, `categories.json`).
+    pub fn set_class_names(&mut self, names: catmap::dataset::class_names::ClassNames) {
+        self.world.insert_resource(DatasetClasses(names));
     }
 
     /// Logs to `recording` from now on (the `Log` stage only runs with a recording).

@@ -5,6 +5,7 @@ use std::time::{Duration, Instant};
 
 use bevy_ecs::prelude::*;
 use catmap::categories::field_set::CategoryFieldSet;
+use catmap::dataset::class_names::ClassNames;
 use catmap::dataset::stream::{StreamMessage, StreamStats};
 use catmap::field::AdamWConfig;
 use catmap::sensor::frame::SharedFrame;
@@ -15,6 +16,17 @@ use crossbeam_channel::{Receiver, TryRecvError};
 /// The mapper's configuration.
 #[derive(Resource, Debug, Clone)]
 pub struct Settings(pub MapperConfig);
+
+/// The names of the dataset's classes (Replica's, which the synthetic scenes use, unless the
+/// source names its own).
+#[derive(Resource, Debug, Clone)]
+pub struct DatasetClasses(pub ClassNames);
+
+impl Default for DatasetClasses {
+    fn default() -> Self {
+        Self(ClassNames::replica())
+    }
+}
 
 /// The receiving end of the frame stream.
 #[derive(Resource, Debug)]

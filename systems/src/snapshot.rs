@@ -11,7 +11,7 @@ use crate::components::{
     Background, Category, ClassVotes, Keyframes, LatestBox, Object, ObjectBounds, ObjectClass, ObjectCloud,
     VisibleFrames,
 };
-use crate::resources::StreamProgress;
+use crate::resources::{DatasetClasses, StreamProgress};
 
 /// One object as the mapper knows it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -20,6 +20,8 @@ pub struct ObjectSnapshot {
     pub id: ObjectId,
     /// Majority class.
     pub class: ClassId,
+    /// Its name in the dataset (`class {id}` when it has none).
+    pub class_name: String,
     /// Votes per class.
     pub class_votes: Vec<(ClassId, u64)>,
     /// Frames the object was visible in.
@@ -79,6 +81,7 @@ impl MapSnapshot {
     /// Reads the map out of `world`.
     pub fn of(world: &mut World) -> Self {
         let progress = world.resource::<StreamProgress>().clone();
+        let names = world.resource::<DatasetClasses>().0.clone();
         let mut objects: Vec<ObjectSnapshot> = world
             .query::<(
                 &Object,
@@ -95,6 +98,7 @@ impl MapSnapshot {
                 |(object, class, votes, visible, keyframes, latest, cloud, bounds)| ObjectSnapshot {
                     id: object.id,
                     class: class.0,
+                    class_name: names.name(class.0),
                     class_votes: votes.0.iter().map(|(&c, &n)| (c, n)).collect(),
                     visible_frames: visible.0,
                     keyframes: keyframes.0.frames(),

@@ -6,7 +6,6 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::Context as _;
-use catmap::dataset::classes::replica_name;
 use catmap::metrics::{ClassLabel, ObjectClasses};
 use catmap::{ClassId, ObjectId};
 use serde::{Deserialize, Serialize};
@@ -141,10 +140,6 @@ fn object_classes(rows: &[ObjectRow]) -> ObjectClasses {
         .collect()
 }
 
-fn class_name(class: catmap::ClassId) -> String {
-    replica_name(class).map_or_else(|| format!("class {class}"), str::to_owned)
-}
-
 impl RunSummary {
     /// Builds the summary of a finished map.
     pub fn new(dataset: String, map: &MapSnapshot, stage_seconds: BTreeMap<String, f64>, total_seconds: f64) -> Self {
@@ -154,7 +149,7 @@ impl RunSummary {
             .map(|o| ObjectRow {
                 id: o.id.0,
                 class: o.class.0,
-                class_name: class_name(o.class),
+                class_name: o.class_name.clone(),
                 visible_frames: o.visible_frames,
                 cloud_points: o.cloud_points,
                 box_extents_m: o.bounds.map(|b| b.extents().into()),
@@ -260,7 +255,7 @@ mod tests {
         ObjectRow {
             id,
             class,
-            class_name: class_name(ClassId(class)),
+            class_name: catmap::dataset::class_names::ClassNames::replica().name(ClassId(class)),
             visible_frames: 1,
             cloud_points: 10,
             box_extents_m: None,

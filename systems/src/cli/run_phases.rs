@@ -81,6 +81,7 @@ pub fn drive(start: Start, plan: RunPlan, source: Arc<dyn FrameSource>, started:
         Start::Fresh(config) => Mapper::with_inbox(*config, inbox)?,
         Start::Resumed(saved) => Mapper::from_checkpoint(*saved, inbox)?,
     };
+    mapper.set_class_names(source.class_names());
     let dropped = stream.as_ref().map(|s| Arc::clone(&s.dropped));
     if let Some(dropped) = &dropped {
         mapper.count_drops_from(Arc::clone(dropped));

@@ -16,7 +16,7 @@
 use std::collections::BTreeMap;
 
 use bevy_ecs::prelude::*;
-use catmap::dataset::classes::replica_name;
+use catmap::dataset::class_names::ClassNames;
 use catmap::geometry::mesh::TriangleMesh;
 use catmap::training::MeshSource;
 use catmap::{ClassId, ObjectId};
@@ -26,7 +26,7 @@ use crate::components::{
 };
 use crate::recording::{Rerun, warn_on_error};
 use crate::rerun_paths::{self as paths, OwnerEntity};
-use crate::resources::{FinalMeshes, Settings, StreamProgress};
+use crate::resources::{DatasetClasses, FinalMeshes, Settings, StreamProgress};
 
 /// Logs the static view coordinates once.
 pub fn log_world_setup(rerun: &rerun::RecordingStream) {
@@ -40,6 +40,7 @@ pub fn log_world_setup(rerun: &rerun::RecordingStream) {
 /// appear or change class.
 pub fn log_instance_legend(
     rerun: Res<Rerun>,
+    names: Res<DatasetClasses>,
     changed: Query<(), Changed<ObjectClass>>,
     objects: Query<(&Object, &ObjectClass)>,
 ) {
@@ -53,7 +54,7 @@ pub fn log_instance_legend(
             let [r, g, b] = class_color(class.0);
             Some((
                 id,
-                object_label(object.id, class.0),
+                object_label(&names.0, object.id, class.0),
                 rerun::datatypes::Rgba32::from_rgb(r, g, b),
             ))
         })
@@ -101,6 +102,7 @@ pub fn log_object_clouds(
 /// Logs the oriented box of every object whose box was refitted this tick.
 pub fn log_object_boxes(
     rerun: Res<Rerun>,
+    names: Res<DatasetClasses>,
     objects: Query<(&Object, &ObjectClass, &ObjectBounds), Changed<ObjectBounds>>,
 ) {
     for (object, class, bounds) in &objects {
@@ -114,7 +116,7 @@ pub fn log_object_boxes(
         )
         .with_quaternions([rerun::Quaternion::from_xyzw([q.i, q.j, q.k, q.w])])
         .with_colors([rerun::Color::from_rgb(r, g, bl)])
-        .with_labels([object_label(object.id, class.0)]);
+        .with_labels([object_label(&names.0, object.id, class.0)]);
         let path = paths::of(Some(object.id), OwnerEntity::Box);
         warn_on_error(rerun.0.log(path.as_str(), &archetype), &path);
     }
@@ -215,6 +217,7 @@ fn log_owner_mesh(
 /// labelled) and its uncertainty sphere (points coloured from red, g = 0, to green, g = 1).
 pub fn log_memberships(
     rerun: Res<Rerun>,
+    names: Res<DatasetClasses>,
     progress: Res<StreamProgress>,
     members: Query<(&Object, &Membership, Option<&Reliability>), Changed<Membership>>,
 ) {
@@ -223,7 +226,12 @@ pub fn log_memberships(
     }
     for (object, membership, reliability) in &members {
         let path = paths::of(Some(object.id), OwnerEntity::AlignedBox);
-        warn_on_error(rerun.0.log(path.as_str(), &aligned_box(object.id, membership)), &path);
+        warn_on_error(
+            rerun
+                .0
+                .log(path.as_str(), &aligned_box(&names.0, object.id, membership)),
+            &path,
+        );
         if let Some(reliability) = reliability {
             let path = paths::of(Some(object.id), OwnerEntity::Reliability);
             warn_on_error(
@@ -236,14 +244,14 @@ pub fn log_memberships(
 
 /// A member's box in its NOCS frame, coloured by subcategory and labelled with its class,
 /// subcategory and whether it is the representative.
-fn aligned_box(id: ObjectId, membership: &Membership) -> rerun::Boxes3D {
+fn aligned_box(names: &ClassNames, id: ObjectId, membership: &Membership) -> rerun::Boxes3D {
     let b = membership.member.nocs.oriented_box();
     let (c, q) = (b.center(), b.world_from_box.rotation);
     let [r, g, bl] = SUBCATEGORY_PALETTE[membership.subcategory % SUBCATEGORY_PALETTE.len()];
     let rep = if membership.representative == id { " · rep" } else { "" };
     let label = format!(
         "{} · sub {}{rep}",
-        object_label(id, membership.class),
+        object_label(names, id, membership.class),
         membership.subcategory
     );
     rerun::Boxes3D::from_centers_and_half_sizes(
@@ -276,8 +284,8 @@ const SUBCATEGORY_PALETTE: [[u8; 3]; 6] = [
 ];
 
 /// "chair 3": the class name (or number) and the object id.
-fn object_label(id: ObjectId, class: ClassId) -> String {
-    match replica_name(class) {
+fn object_label(names: &ClassNames, id: ObjectId, class: ClassId) -> String {
+    match names.get(class) {
         Some(name) => format!("{name} {id}"),
         None => format!("class {class} / {id}"),
     }

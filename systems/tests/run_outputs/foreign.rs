@@ -45,29 +45,25 @@ fn make_foreign(work: &Path, kind: ForeignSceneFile) -> (Vec<(u64, String)>, Str
     (classes, camera)
 }
 
-fn run_on_a_foreign_dataset(kind: ForeignSceneFile) {
-    let work = tempfile::tempdir().expect("temp dir");
-    let work = work.path();
-    small_scene(work);
-    let (classes, camera) = make_foreign(work, kind);
-    let output = catmap()
+/// `catmap run` on the foreign dataset `work/scene` (every third frame) into `work/out`.
+fn run_foreign(work: &Path, camera: &str) -> Output {
+    catmap()
         .env("RUST_LOG", "info")
         .arg("run")
         .arg("--dataset")
         .arg(work.join("scene"))
-        .args(["--format", "replica", "--camera", &camera])
+        .args(["--format", "replica", "--camera", camera])
         .arg("--config")
         .arg(work.join("config.toml"))
         .args(["--stride", "3", "--out"])
         .arg(work.join("out"))
         .output()
-        .expect("catmap runs");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "{kind:?}: the run exits 0: {stderr}");
-    let out = work.join("out");
-    assert_outputs_whole(&out);
-    let metrics = json(&out.join("metrics.json"));
-    let scored: Vec<(u64, String)> = metrics["objects"]
+        .expect("catmap runs")
+}
+
+/// Object id and class name of every object in `out/metrics.json`.
+fn scored_classes(out: &Path) -> Vec<(u64, String)> {
+    json(&out.join("metrics.json"))["objects"]
         .as_array()
         .expect("objects scored")
         .iter()
@@ -77,7 +73,40 @@ fn run_on_a_foreign_dataset(kind: ForeignSceneFile) {
                 o["class_name"].as_str().expect("name").to_owned(),
             )
         })
-        .collect();
+        .collect()
+}
+
+/// Rewrites every class image of the Replica-layout `scene`: class `from` becomes `to`.
+fn relabel_classes(scene: &Path, changes: &[(u16, u16)]) {
+    let relabel = |c: u16| changes.iter().find(|(from, _)| *from == c).map_or(c, |(_, to)| *to);
+    for entry in std::fs::read_dir(scene.join("semantic_class")).expect("class images") {
+        let path = entry.expect("entry").path();
+        match image::open(&path).expect("class image decodes") {
+            image::DynamicImage::ImageLuma8(mut grey) => {
+                grey.pixels_mut()
+                    .for_each(|p| p.0[0] = relabel(u16::from(p.0[0])) as u8);
+                grey.save(&path).expect("class image written");
+            }
+            image::DynamicImage::ImageLuma16(mut grey) => {
+                grey.pixels_mut().for_each(|p| p.0[0] = relabel(p.0[0]));
+                grey.save(&path).expect("class image written");
+            }
+            other => panic!("{}: a grey class image, not {:?}", path.display(), other.color()),
+        }
+    }
+}
+
+fn run_on_a_foreign_dataset(kind: ForeignSceneFile) {
+    let work = tempfile::tempdir().expect("temp dir");
+    let work = work.path();
+    small_scene(work);
+    let (classes, camera) = make_foreign(work, kind);
+    let output = run_foreign(work, &camera);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{kind:?}: the run exits 0: {stderr}");
+    let out = work.join("out");
+    assert_outputs_whole(&out);
+    let scored = scored_classes(&out);
     assert_eq!(
         scored, classes,
         "{kind:?}: every object named by its class from the map"
@@ -140,5 +169,51 @@ fn a_failing_evaluation_leaves_a_complete_run_that_exits_0() {
     assert!(
         stdout.contains("eval failed (the map is complete)"),
         "the end table says so: {stdout}"
+    );
+}
+
+#[test]
+fn a_replica_dataset_catmap_did_not_write_names_replicas_classes_and_its_own_info_file_wins() {
+    let work = tempfile::tempdir().expect("temp dir");
+    let work = work.path();
+    small_scene(work);
+    let (classes, camera) = make_foreign(work, ForeignSceneFile::Absent);
+    let scene = work.join("scene");
+    relabel_classes(&scene, &[(78, 76), (47, 44)]);
+    std::fs::create_dir(scene.join("habitat")).expect("habitat folder");
+    let info = r#"{"classes": [{"id": 80, "name": "dining-table"}], "objects": [], "id_to_label": []}"#;
+    std::fs::write(scene.join("habitat/info_semantic.json"), info).expect("info written");
+    let output = run_foreign(work, &camera);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "the run exits 0: {stderr}");
+    let renamed = |name: &str| {
+        match name {
+            "stool" => "sofa",
+            "lamp" => "indoor-plant",
+            "table" => "dining-table",
+            other => other,
+        }
+        .to_owned()
+    };
+    let expected: Vec<(u64, String)> = classes.iter().map(|(id, name)| (*id, renamed(name))).collect();
+    assert!(
+        expected.iter().any(|(_, n)| n == "sofa"),
+        "the scene has a stool to relabel: {classes:?}"
+    );
+    assert_eq!(
+        scored_classes(&work.join("out")),
+        expected,
+        "metrics.json names Replica's classes"
+    );
+    let summary = json(&work.join("out/summary.json"));
+    let summary_names: Vec<&str> = summary["objects"]
+        .as_array()
+        .expect("objects")
+        .iter()
+        .map(|o| o["class_name"].as_str().expect("name"))
+        .collect();
+    assert!(
+        summary_names.contains(&"sofa") && summary_names.contains(&"dining-table"),
+        "{summary_names:?}"
     );
 }
