@@ -23,6 +23,8 @@ pub enum RngStream {
     CategoryField(u32),
     /// The k-th remapping of category members (fresh codes of members joining a field).
     CategoryCodes(u32),
+    /// The sensor and segmenter imperfections of a synthetic scene's frame at this position.
+    SensorFrame(u64),
 }
 
 /// Field streams start here, above every object stream.
@@ -39,6 +41,7 @@ pub fn seeded_rng(seed: u64, stream: RngStream) -> ChaCha8Rng {
         RngStream::ObjectField(ObjectId(id)) => FIELD_STREAMS + 2 + u64::from(id),
         RngStream::CategoryField(k) => 2 * FIELD_STREAMS + u64::from(k),
         RngStream::CategoryCodes(k) => 3 * FIELD_STREAMS + u64::from(k),
+        RngStream::SensorFrame(position) => 4 * FIELD_STREAMS + position,
     });
     rng
 }

@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::furniture::Design;
 use super::preset::Preset;
 use super::scene::SyntheticScene;
+use super::sensor_noise::SensorSettings;
 use crate::dataset::class_names::replica_class_name;
 
 /// Seed, preset and every object's ground truth.
@@ -17,6 +18,9 @@ pub struct SceneDescription {
     pub preset: Preset,
     /// Objects in id order.
     pub objects: Vec<ObjectDescription>,
+    /// The depth camera's and segmenter's imperfections (exact when absent).
+    #[serde(default)]
+    pub sensor: SensorSettings,
 }
 
 /// Ground truth of one object.
@@ -56,6 +60,7 @@ impl SceneDescription {
             seed: scene.seed(),
             preset: scene.preset(),
             objects,
+            sensor: scene.sensor(),
         }
     }
 }

@@ -28,6 +28,7 @@ pub mod render;
 pub mod replica_writer;
 pub mod room;
 pub mod scene;
+pub mod sensor_noise;
 pub mod trajectory;
 
 pub use description::{ObjectDescription, SceneDescription};
@@ -38,3 +39,4 @@ pub use render::RenderedFrame;
 pub use replica_writer::write_replica_layout;
 pub use room::{Room, SurfaceLabel};
 pub use scene::{SceneObject, SyntheticScene};
+pub use sensor_noise::{InstanceIds, SensorModel, SensorSettings};

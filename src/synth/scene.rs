@@ -19,6 +19,7 @@ use super::layout::place_furniture;
 use super::preset::Preset;
 use super::render::{RenderedFrame, render_view};
 use super::room::{Room, SurfaceLabel};
+use super::sensor_noise::SensorSettings;
 use super::trajectory::camera_trajectory;
 use crate::dataset::{FrameSource, frame_index};
 use crate::error::{CatmapError, Result};
@@ -74,6 +75,7 @@ pub struct SyntheticScene {
     trajectory: Vec<Isometry3<f32>>,
     geometry: SceneGeometry,
     observed: OnceLock<BTreeMap<ObjectId, f32>>,
+    sensor: SensorSettings,
 }
 
 impl SyntheticScene {
@@ -115,7 +117,19 @@ impl SyntheticScene {
             objects,
             geometry,
             observed: OnceLock::new(),
+            sensor: SensorSettings::default(),
         })
+    }
+
+    /// The same scene seen through `sensor`'s depth camera and segmenter.
+    pub fn with_sensor(mut self, sensor: SensorSettings) -> Self {
+        self.sensor = sensor;
+        self
+    }
+
+    /// The imperfections its frames have.
+    pub fn sensor(&self) -> SensorSettings {
+        self.sensor
     }
 
     /// The seed the scene was generated from.
@@ -148,7 +162,8 @@ impl SyntheticScene {
         &self.trajectory
     }
 
-    /// Renders frame `position` with its raw instance-id and class images.
+    /// Renders frame `position` with its raw instance-id and class images, as the scene's
+    /// sensor gives them.
     pub fn render(&self, position: usize) -> Result<RenderedFrame> {
         let pose = self.trajectory.get(position).ok_or_else(|| {
             CatmapError::layout(
@@ -156,7 +171,14 @@ impl SyntheticScene {
                 format!("frame {position} out of range ({} frames)", self.trajectory.len()),
             )
         })?;
-        Ok(render_view(&self.geometry, &self.intrinsics, pose))
+        let mut frame = render_view(&self.geometry, &self.intrinsics, pose);
+        if !self.sensor.is_exact() {
+            let mut classes: Vec<ClassId> = self.objects.iter().map(SceneObject::class).collect();
+            classes.sort_unstable();
+            classes.dedup();
+            self.sensor.apply(&mut frame, self.seed, position, &classes);
+        }
+        Ok(frame)
     }
 
     /// Per object, the fraction of its surface ([`OBSERVATION_SAMPLES`] area-uniform samples) seen in

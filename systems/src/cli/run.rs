@@ -165,7 +165,12 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let source = match &args.dataset {
         Some(_) => plan.open_source(&config)?,
         None => {
-            write_scene(config.seed, args.preset.into(), &plan.dataset)?;
+            write_scene(
+                config.seed,
+                args.preset.into(),
+                catmap::synth::SensorSettings::default(),
+                &plan.dataset,
+            )?;
             plan.open_source(&config)?
         }
     };

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
+use catmap::synth::{InstanceIds, Preset, SensorModel, SensorSettings, SyntheticScene, write_replica_layout};
 
 use crate::cli::progress::bar;
 
@@ -19,6 +19,47 @@ pub struct SynthArgs {
     /// Scene size.
     #[arg(long, value_enum, default_value_t = PresetArg::Default)]
     pub preset: PresetArg,
+    /// Depth camera and segmenter: exact, or Kinect-like depth noise with holes at depth edges
+    /// and a segmenter's jittered, sometimes missed or mislabelled masks.
+    #[arg(long, value_enum, default_value_t = NoiseArg::None)]
+    pub noise: NoiseArg,
+    /// Instance ids: one per object over the sequence, or every frame its own.
+    #[arg(long, value_enum, default_value_t = IdsArg::Consistent)]
+    pub ids: IdsArg,
+}
+
+/// `--noise` values.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NoiseArg {
+    /// Exact depth and masks.
+    None,
+    /// Kinect-like depth and a 2D segmenter's masks.
+    Kinect,
+}
+
+/// `--ids` values.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IdsArg {
+    /// One id per object over the whole sequence.
+    Consistent,
+    /// Every frame numbers its masks anew.
+    PerFrame,
+}
+
+impl SynthArgs {
+    /// The sensor the arguments ask for.
+    pub fn sensor(&self) -> SensorSettings {
+        SensorSettings {
+            model: match self.noise {
+                NoiseArg::None => SensorModel::None,
+                NoiseArg::Kinect => SensorModel::Kinect,
+            },
+            ids: match self.ids {
+                IdsArg::Consistent => InstanceIds::Consistent,
+                IdsArg::PerFrame => InstanceIds::PerFrame,
+            },
+        }
+    }
 }
 
 /// Scene presets on the command line.
@@ -47,13 +88,15 @@ impl From<PresetArg> for Preset {
 
 /// Runs `catmap synth`.
 pub fn synth(args: &SynthArgs) -> anyhow::Result<()> {
-    write_scene(args.seed, args.preset.into(), &args.out)?;
+    write_scene(args.seed, args.preset.into(), args.sensor(), &args.out)?;
     Ok(())
 }
 
 /// Generates and writes a scene with a progress bar; returns it.
-pub fn write_scene(seed: u64, preset: Preset, out: &Path) -> anyhow::Result<SyntheticScene> {
-    let scene = SyntheticScene::generate(seed, preset).context("cannot generate the synthetic scene")?;
+pub fn write_scene(seed: u64, preset: Preset, sensor: SensorSettings, out: &Path) -> anyhow::Result<SyntheticScene> {
+    let scene = SyntheticScene::generate(seed, preset)
+        .context("cannot generate the synthetic scene")?
+        .with_sensor(sensor);
     let progress = bar(0, "synth");
     write_replica_layout(&scene, out, |done, total| {
         progress.set_length(total as u64);
