@@ -5,6 +5,7 @@ pub mod cell_evidence;
 pub mod config;
 pub mod frame_observation;
 pub mod hidden_space;
+pub mod instance_association;
 pub mod keyframes;
 pub mod object_bounds;
 pub mod object_view;
