@@ -88,6 +88,8 @@ mod tests {
                 class: None,
                 class_name: class.to_owned(),
                 observed_surface_fraction: None,
+                prediction: None,
+                purity_pct: None,
                 scores: ObjectScores {
                     status: PredictionStatus::Reconstructed,
                     accuracy_cm: Some(2.0),

@@ -14,7 +14,8 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 use super::crop::Crop;
-use super::ground_truth::{GroundTruth, ObjectClasses, mesh_file_name};
+use super::ground_truth::{GroundTruth, ObjectClasses, mesh_file_name, parse_mesh_file_name};
+use super::object_matching::{GeometryPairing, Pairing, pair, vote};
 use super::object_scores::score_object;
 use super::report::{EvalSettings, EvaluationReport, ObjectMetrics};
 use crate::error::{CatmapError, Result};
@@ -45,12 +46,22 @@ pub fn evaluate_ground_truth(
     if !pred_dir.is_dir() {
         return Err(CatmapError::layout(pred_dir, "prediction folder does not exist"));
     }
+    let pairing = match settings.pairing {
+        Pairing::ById => None,
+        Pairing::Geometry => Some(pair_by_geometry(pred_dir, ground_truth, settings.seed)?),
+    };
     let objects = ground_truth
         .entries
         .par_iter()
         .map(|entry| -> Result<ObjectMetrics> {
             let gt = TriangleMesh::read_ply(&entry.mesh_path)?;
-            let prediction = prediction_path(pred_dir, entry.id)
+            let paired = pairing.as_ref().map(|p| p.paired.get(&entry.id).copied());
+            let predicted_id = match paired {
+                None => Some(entry.id),
+                Some(pair) => pair.map(|(prediction, _)| prediction),
+            };
+            let prediction = predicted_id
+                .and_then(|id| prediction_path(pred_dir, id))
                 .map(|p| TriangleMesh::read_ply(&p))
                 .transpose()?;
             let mut rng = seeded_rng(settings.seed, RngStream::Object(entry.id));
@@ -67,11 +78,46 @@ pub fn evaluate_ground_truth(
                 class: entry.class,
                 class_name: entry.class_name.clone(),
                 observed_surface_fraction: entry.observed_surface_fraction,
+                prediction: paired.flatten().map(|(prediction, _)| prediction),
+                purity_pct: paired.flatten().map(|(_, purity)| 100.0 * purity),
                 scores,
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    Ok(EvaluationReport::new(*settings, objects))
+    let mut report = EvaluationReport::new(*settings, objects);
+    report.extra_predictions = pairing.map(|p| p.extra).unwrap_or_default();
+    Ok(report)
+}
+
+/// Every prediction of `pred_dir` (`obj_{id}.ply`, or in `meshes/`) paired with the ground
+/// truth by geometry.
+fn pair_by_geometry(pred_dir: &Path, ground_truth: &GroundTruth, seed: u64) -> Result<GeometryPairing> {
+    let mut ids: Vec<ObjectId> = Vec::new();
+    for dir in [pred_dir.to_owned(), pred_dir.join("meshes")] {
+        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        ids.extend(entries.filter_map(|e| e.ok()?.file_name().to_str().and_then(parse_mesh_file_name)));
+    }
+    ids.sort_unstable();
+    ids.dedup();
+    let read = |id: ObjectId, path: Option<PathBuf>| -> Result<Option<(ObjectId, TriangleMesh)>> {
+        path.map(|p| Ok((id, TriangleMesh::read_ply(&p)?))).transpose()
+    };
+    let predictions = ids
+        .par_iter()
+        .map(|&id| read(id, prediction_path(pred_dir, id)))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>();
+    let truths = ground_truth
+        .entries
+        .par_iter()
+        .map(|e| read(e.id, Some(e.mesh_path.clone())))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>();
+    Ok(pair(&vote(&predictions, &truths, seed)?))
 }
 
 /// The predicted mesh of object `id`: `pred_dir/obj_{id}.ply`, else `pred_dir/meshes/obj_{id}.ply`.

@@ -134,7 +134,7 @@ pub fn mesh_file_name(id: ObjectId) -> String {
 }
 
 /// The id in a file name `obj_{id}.ply`.
-fn parse_mesh_file_name(name: &str) -> Option<ObjectId> {
+pub(crate) fn parse_mesh_file_name(name: &str) -> Option<ObjectId> {
     name.strip_prefix("obj_")?
         .strip_suffix(".ply")?
         .parse()

@@ -2,6 +2,7 @@
 
 use std::fmt::Write as _;
 
+use super::object_matching::Pairing;
 use super::object_scores::PredictionStatus;
 use super::report::{EvaluationReport, MetricSummary};
 
@@ -20,8 +21,15 @@ pub fn render_markdown(report: &EvaluationReport) -> String {
     // The observed share of each object's surface, when the ground truth states it.
     let seen = report.objects.iter().any(|o| o.observed_surface_fraction.is_some());
     let (seen_header, seen_align) = if seen { (" seen [%] |", "---:|") } else { ("", "") };
+    // Paired by geometry: which prediction, and how pure it is.
+    let paired = report.settings.pairing == Pairing::Geometry;
+    let (pair_header, pair_align) = if paired {
+        (" prediction | purity [%] |", "---:|---:|")
+    } else {
+        ("", "")
+    };
     out.push_str(&format!(
-        "## Objects\n\n| object | class |{seen_header} {SCORE_HEADER} | far >5cm [%] |\n|---:|---|{seen_align}{SCORE_ALIGN}|---:|\n"
+        "## Objects\n\n| object | class |{seen_header}{pair_header} {SCORE_HEADER} | far >5cm [%] |\n|---:|---|{seen_align}{pair_align}{SCORE_ALIGN}|---:|\n"
     ));
     for o in &report.objects {
         let v = &o.scores;
@@ -41,7 +49,24 @@ pub fn render_markdown(report: &EvaluationReport) -> String {
             (true, None) => " – |".to_owned(),
             (true, Some(f)) => format!(" {:.1} |", 100.0 * f),
         };
-        let _ = writeln!(out, "| {} | {} |{seen_cell} {row} |", o.id, o.class_name);
+        let pair_cell = match (paired, o.prediction, o.purity_pct) {
+            (false, _, _) => String::new(),
+            (true, Some(p), Some(purity)) => format!(" {p} | {purity:.1} |"),
+            (true, _, _) => " – | – |".to_owned(),
+        };
+        let _ = writeln!(out, "| {} | {} |{seen_cell}{pair_cell} {row} |", o.id, o.class_name);
+    }
+    if paired {
+        let extra: Vec<String> = report.extra_predictions.iter().map(ToString::to_string).collect();
+        let _ = writeln!(
+            out,
+            "\nPredictions paired with no ground-truth object: {}",
+            if extra.is_empty() {
+                "none".to_owned()
+            } else {
+                extra.join(", ")
+            }
+        );
     }
     out.push_str(&format!(
         "\n## Classes\n\n| class | objects | missing | {SCORE_HEADER} |\n|---|---:|---:|{SCORE_ALIGN}|\n"
@@ -105,6 +130,8 @@ mod tests {
                 class: None,
                 class_name: "chair".into(),
                 observed_surface_fraction: None,
+                prediction: None,
+                purity_pct: None,
                 scores,
             },
             ObjectMetrics {
@@ -112,6 +139,8 @@ mod tests {
                 class: None,
                 class_name: "chair".into(),
                 observed_surface_fraction: None,
+                prediction: None,
+                purity_pct: None,
                 scores: ObjectScores::missing(),
             },
         ];
@@ -141,6 +170,8 @@ mod tests {
             class: None,
             class_name: "chair".into(),
             observed_surface_fraction: fraction,
+            prediction: None,
+            purity_pct: None,
             scores: ObjectScores::missing(),
         };
         let text = render_markdown(&EvaluationReport::new(

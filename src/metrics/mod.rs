@@ -18,6 +18,7 @@ pub mod crop;
 pub mod eval_dirs;
 pub mod ground_truth;
 pub mod markdown;
+pub mod object_matching;
 pub mod object_scores;
 pub mod report;
 

@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::crop::Crop;
+use super::object_matching::Pairing;
 use super::object_scores::{ObjectScores, PredictionStatus, SAMPLES_PER_MESH};
 use crate::ids::{ClassId, ObjectId};
 
@@ -18,6 +19,9 @@ pub struct EvalSettings {
     pub seed: u64,
     /// Surface samples per mesh.
     pub samples_per_mesh: usize,
+    /// How predictions are paired with ground-truth objects: by id, or by geometry when the
+    /// run's ids are not the dataset's ([`super::object_matching`]).
+    pub pairing: Pairing,
 }
 
 impl Default for EvalSettings {
@@ -26,6 +30,7 @@ impl Default for EvalSettings {
             crop: Crop::Paper,
             seed: 0,
             samples_per_mesh: SAMPLES_PER_MESH,
+            pairing: Pairing::ById,
         }
     }
 }
@@ -43,6 +48,13 @@ pub struct ObjectMetrics {
     /// `scene.json`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub observed_surface_fraction: Option<f32>,
+    /// The prediction paired with it by geometry ([`Pairing::Geometry`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prediction: Option<ObjectId>,
+    /// That prediction's purity: the share of its surface near some ground-truth object that is
+    /// near this one, % ([`super::object_matching`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub purity_pct: Option<f32>,
     /// The scores.
     pub scores: ObjectScores,
 }
@@ -100,6 +112,9 @@ pub struct EvaluationReport {
     pub classes: BTreeMap<String, MetricSummary>,
     /// Over all objects.
     pub mean: MetricSummary,
+    /// Predictions paired with no ground-truth object ([`Pairing::Geometry`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub extra_predictions: Vec<ObjectId>,
 }
 
 impl EvaluationReport {
@@ -120,6 +135,7 @@ impl EvaluationReport {
             objects,
             classes,
             mean,
+            extra_predictions: Vec::new(),
         }
     }
 }
@@ -134,6 +150,8 @@ mod tests {
             class: None,
             class_name: class_name.to_owned(),
             observed_surface_fraction: None,
+            prediction: None,
+            purity_pct: None,
             scores,
         }
     }
@@ -182,6 +200,7 @@ mod tests {
                 crop: Crop::Vmap,
                 seed: 4,
                 samples_per_mesh: 100,
+                pairing: Pairing::Geometry,
             },
             vec![
                 object(1, "box", reconstructed(0.25, 1.5, 99.5)),

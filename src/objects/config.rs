@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::objects::instance_association::AssociationConfig;
+
 /// Object entities built from instance masks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -27,6 +29,9 @@ pub struct ObjectConfig {
     /// How the oriented box is fitted to the thinned cloud. `None`: the schedule's choice
     /// ([`crate::config::MapperConfig::object_settings`]).
     pub box_fit: Option<BoxFit>,
+    /// Where object ids come from: the dataset's (consistent) ids, or per-frame masks associated
+    /// into objects ([`crate::objects::instance_association`]).
+    pub association: AssociationConfig,
 }
 
 /// How an object's oriented box is fitted to its observed cloud.
@@ -52,6 +57,7 @@ impl Default for ObjectConfig {
             background_pixel_stride: 4,
             background_voxel_m: 0.05,
             box_fit: None,
+            association: AssociationConfig::default(),
         }
     }
 }

@@ -28,7 +28,8 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use crate::ids::{ClassId, FrameIndex, ObjectId};
-use crate::objects::frame_observation::FrameObservation;
+use crate::objects::config::ObjectConfig;
+use crate::objects::frame_observation::{FrameObservation, observe_objects};
 use crate::objects::observed_cloud::VoxelKeyHasher;
 use crate::sensor::frame::{InstanceLabel, InstanceMask, RgbdFrame};
 
@@ -311,6 +312,24 @@ pub fn mask_evidence(frame: &RgbdFrame, observation: &FrameObservation, cfg: &As
             Some(MaskEvidence { local, class, points })
         })
         .collect()
+}
+
+/// One frame of per-frame masks made into objects: its masks' evidence is associated by
+/// `tracker`, the frame relabelled, and its observation made again from the relabelled mask.
+pub fn associate_frame(
+    tracker: &mut InstanceTracker,
+    frame: &RgbdFrame,
+    observation: &FrameObservation,
+    cfg: &ObjectConfig,
+) -> (RgbdFrame, FrameObservation) {
+    let fates = tracker.associate(
+        frame.index,
+        &mask_evidence(frame, observation, &cfg.association),
+        &cfg.association,
+    );
+    let relabelled = relabel_instances(frame, &fates);
+    let observation = observe_objects(&relabelled, cfg);
+    (relabelled, observation)
 }
 
 /// `frame` with its masks renamed as `fates` says: a mask that shows an object gets its id; a

@@ -23,7 +23,8 @@ use crate::components::{
 };
 use crate::resources::CategoryFields;
 use crate::resources::{
-    CategoryIndex, Fields, ObjectIndex, Settings, StageTimes, StreamProgress, TrainingQueue, TrainingSchedule,
+    Association, CategoryIndex, Fields, ObjectIndex, Settings, StageTimes, StreamProgress, TrainingQueue,
+    TrainingSchedule,
 };
 use crate::run_state::PhaseProgress;
 
@@ -75,6 +76,9 @@ struct CategoryState {
 pub(crate) struct MapperState {
     config: MapperConfig,
     progress: StreamProgress,
+    /// The association of per-frame masks (empty with consistent ids).
+    #[serde(default)]
+    association: Association,
     queue: TrainingQueue,
     schedule: TrainingSchedule,
     phases: PhaseProgress,
@@ -161,6 +165,7 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
     let state = MapperState {
         config: world.resource::<Settings>().0.clone(),
         progress: world.resource::<StreamProgress>().clone(),
+        association: world.resource::<Association>().clone(),
         queue: *world.resource::<TrainingQueue>(),
         schedule: world.resource::<TrainingSchedule>().clone(),
         phases: *world.resource::<PhaseProgress>(),
@@ -379,6 +384,7 @@ pub(crate) fn restore(
     world.insert_resource(ObjectIndex(index));
     world.insert_resource(CategoryIndex(categories));
     world.insert_resource(state.progress);
+    world.insert_resource(state.association);
     world.insert_resource(state.queue);
     world.insert_resource(state.schedule);
     world.insert_resource(state.phases);

@@ -28,6 +28,11 @@ impl Default for DatasetClasses {
     }
 }
 
+/// The association of per-frame masks into objects (`objects.association.instances =
+/// "per-frame"`).
+#[derive(Resource, Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Association(pub catmap::objects::instance_association::InstanceTracker);
+
 /// The receiving end of the frame stream.
 #[derive(Resource, Debug)]
 pub struct FrameInbox(pub Receiver<StreamMessage>);

@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, bail};
+use catmap::metrics::object_matching::Pairing;
 use catmap::metrics::{Crop, EvalSettings, ObjectClasses, evaluate_ground_truth, render_markdown};
 use catmap_systems::summary::read_object_classes;
 
@@ -29,11 +30,25 @@ pub struct EvalArgs {
     /// Seed of the surface sampling.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// How predictions pair with ground-truth objects: by id (`obj_{id}.ply` against
+    /// `obj_{id}.ply`), or by geometry (each ground-truth object takes the prediction most of
+    /// whose surface lies on it: for runs with `--instances per-frame`, whose ids are their own).
+    #[arg(long, value_enum, default_value_t = PairingArg::Id)]
+    pub pairing: PairingArg,
     /// Surface samples per mesh (both the prediction's and the ground truth's). The paper's
     /// 10 000 leave a sampling floor: the ground truth scored against itself gets ~0.7 cm
     /// accuracy and completion and C.R. < 1 cm ~82 % on the default scene; more samples lower it.
     #[arg(long, default_value_t = catmap::metrics::SAMPLES_PER_MESH)]
     pub samples: usize,
+}
+
+/// Pairings on the command line.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PairingArg {
+    /// By id.
+    Id,
+    /// By geometry.
+    Geometry,
 }
 
 /// Crop protocols on the command line.
@@ -69,11 +84,21 @@ pub fn eval(args: &EvalArgs) -> anyhow::Result<()> {
         Some(path) => read_object_classes(path).context("--classes")?,
         None => classes_beside(&args.pred),
     };
+    let pairing = match args.pairing {
+        PairingArg::Id => Pairing::ById,
+        PairingArg::Geometry => Pairing::Geometry,
+    };
+    let classes = if pairing == Pairing::ById {
+        classes
+    } else {
+        ObjectClasses::new()
+    };
     let ground_truth = crate::cli::run_outputs::load_ground_truth(&args.gt, &classes)?;
     let settings = EvalSettings {
         crop: args.crop.into(),
         seed: args.seed,
         samples_per_mesh: args.samples,
+        pairing,
     };
     let report = evaluate_ground_truth(&args.pred, &ground_truth, &settings)
         .with_context(|| format!("cannot evaluate {} against {}", args.pred.display(), args.gt.display()))?;

@@ -87,10 +87,24 @@ pub struct RunArgs {
     /// Frames per second of the live replay [default: the config's `stream.live.fps`, else 30]
     #[arg(long, requires = "live")]
     pub fps: Option<f64>,
+    /// Instance ids of the dataset: one per object over the sequence, or every frame its own
+    /// (a 2D segmenter's); per-frame masks are associated into objects by class and 3D overlap
+    /// [default: the config's `objects.association.instances`, consistent]
+    #[arg(long, value_enum)]
+    pub instances: Option<InstancesArg>,
     /// Continue the interrupted run whose output folder is DIR (from `DIR/checkpoint`), with the
     /// settings it started with; other options are ignored.
     #[arg(long, value_name = "DIR")]
     pub resume: Option<PathBuf>,
+}
+
+/// `--instances` values.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InstancesArg {
+    /// One id per object over the whole sequence (Replica, ScanNet).
+    Consistent,
+    /// Every frame numbers its masks anew.
+    PerFrame,
 }
 
 /// Representative choices.
@@ -196,6 +210,12 @@ fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
         config.stream.max_frames = Some(max_frames);
     }
     config.stream.live.enabled |= args.live;
+    if let Some(instances) = args.instances {
+        config.objects.association.instances = match instances {
+            InstancesArg::Consistent => catmap::objects::instance_association::InstanceSource::Consistent,
+            InstancesArg::PerFrame => catmap::objects::instance_association::InstanceSource::PerFrame,
+        };
+    }
     if let Some(fps) = args.fps {
         config.stream.live.fps = Some(fps);
     }

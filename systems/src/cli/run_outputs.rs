@@ -8,7 +8,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Context as _;
+use catmap::metrics::object_matching::Pairing;
 use catmap::metrics::{EvalSettings, EvaluationReport, GroundTruth, ObjectClasses, SceneFile};
+use catmap::objects::instance_association::InstanceSource;
 use catmap_systems::Mapper;
 use catmap_systems::summary::{RunSummary, StepOutcome};
 
@@ -70,7 +72,14 @@ pub fn write_outputs(
         None => StepOutcome::Skipped {
             reason: "fields.enabled = false: no meshes to evaluate".to_owned(),
         },
-        Some(meshes) => evaluate_run(meshes, plan, config.seed, &summary.object_classes()),
+        Some(meshes) => {
+            let settings = EvalSettings {
+                seed: config.seed,
+                pairing: pairing_of(&config),
+                ..EvalSettings::default()
+            };
+            evaluate_run(meshes, plan, &settings, &summary.object_classes())
+        }
     };
     if !matches!(eval, StepOutcome::Skipped { .. }) {
         summary
@@ -176,7 +185,7 @@ fn complete_recording(plan: &RunPlan) -> StepOutcome {
 
 /// Scores the written meshes against the dataset's `gt_meshes/` when there is one, with the
 /// classes the map voted: `metrics.json` and the tables. Never fails the run.
-fn evaluate_run(meshes: &Path, plan: &RunPlan, seed: u64, classes: &ObjectClasses) -> StepOutcome {
+fn evaluate_run(meshes: &Path, plan: &RunPlan, settings: &EvalSettings, classes: &ObjectClasses) -> StepOutcome {
     let gt_meshes = plan.dataset.join("gt_meshes");
     if !gt_meshes.is_dir() {
         return StepOutcome::Skipped {
@@ -184,7 +193,7 @@ fn evaluate_run(meshes: &Path, plan: &RunPlan, seed: u64, classes: &ObjectClasse
         };
     }
     let json = plan.out.join("metrics.json");
-    match evaluate_and_write(meshes, &plan.dataset, seed, classes, &json) {
+    match evaluate_and_write(meshes, &plan.dataset, settings, classes, &json) {
         Ok(report) => {
             crate::print_stdout(&catmap::metrics::render_markdown(&report));
             tracing::info!(metrics = %json.display(), "evaluation written");
@@ -201,20 +210,28 @@ fn evaluate_run(meshes: &Path, plan: &RunPlan, seed: u64, classes: &ObjectClasse
     }
 }
 
-/// Evaluates `meshes` against `dataset` (paper crop) and writes the report to `json`.
+/// How a run's meshes pair with the ground truth: by geometry when its ids came from per-frame
+/// masks (they are not the dataset's), else by id.
+pub fn pairing_of(config: &catmap::MapperConfig) -> Pairing {
+    match config.objects.association.instances {
+        InstanceSource::Consistent => Pairing::ById,
+        InstanceSource::PerFrame => Pairing::Geometry,
+    }
+}
+
+/// Evaluates `meshes` against `dataset` and writes the report to `json`. Paired by geometry,
+/// the map's classes (keyed by its own ids) do not name the ground truth's objects.
 fn evaluate_and_write(
     meshes: &Path,
     dataset: &Path,
-    seed: u64,
+    settings: &EvalSettings,
     classes: &ObjectClasses,
     json: &Path,
 ) -> anyhow::Result<EvaluationReport> {
-    let ground_truth = load_ground_truth(dataset, classes)?;
-    let settings = EvalSettings {
-        seed,
-        ..EvalSettings::default()
-    };
-    let report = catmap::metrics::evaluate_ground_truth(meshes, &ground_truth, &settings)
+    let none = ObjectClasses::new();
+    let by_id = settings.pairing == Pairing::ById;
+    let ground_truth = load_ground_truth(dataset, if by_id { classes } else { &none })?;
+    let report = catmap::metrics::evaluate_ground_truth(meshes, &ground_truth, settings)
         .with_context(|| format!("cannot evaluate {} against {}", meshes.display(), dataset.display()))?;
     let mut text = serde_json::to_string_pretty(&report).context("cannot serialise the metrics")?;
     text.push('\n');
