@@ -13,6 +13,7 @@
 //! [`evaluate_ground_truth`] evaluates a folder of `obj_{id}.ply` meshes against a
 //! [`GroundTruth`] (its meshes and the objects' classes).
 
+pub mod association_purity;
 pub mod compare;
 pub mod crop;
 pub mod eval_dirs;

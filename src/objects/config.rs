@@ -29,6 +29,14 @@ pub struct ObjectConfig {
     /// How the oriented box is fitted to the thinned cloud. `None`: the schedule's choice
     /// ([`crate::config::MapperConfig::object_settings`]).
     pub box_fit: Option<BoxFit>,
+    /// A mask pixel whose depth lies more than `bleed_depth_m` beyond the nearest pixel of its
+    /// object within this many pixels is a mask bleeding onto what lies behind, and becomes
+    /// unknown ([`crate::objects::mask_trim`]); 0 (the default) turns the check off: at 2 px it
+    /// left the Kinect-like scene's boxes metres too large (holes at depth edges leave a bleed
+    /// pixel no valid pixel of its object within reach).
+    pub bleed_radius_px: u32,
+    /// See `bleed_radius_px`, metres.
+    pub bleed_depth_m: f32,
     /// Where object ids come from: the dataset's (consistent) ids, or per-frame masks associated
     /// into objects ([`crate::objects::instance_association`]).
     pub association: AssociationConfig,
@@ -57,6 +65,8 @@ impl Default for ObjectConfig {
             background_pixel_stride: 4,
             background_voxel_m: 0.05,
             box_fit: None,
+            bleed_radius_px: 0,
+            bleed_depth_m: 0.1,
             association: AssociationConfig::default(),
         }
     }

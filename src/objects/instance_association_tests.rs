@@ -210,3 +210,48 @@ fn a_mask_without_depth_is_held_and_relabelling_names_objects_and_unknowns() {
         ]
     );
 }
+
+/// Associates every frame of the small scene of `seed` seen through `sensor` (per-frame ids) and
+/// tallies the result against the exact render.
+fn associate_small_scene(
+    seed: u64,
+    sensor: crate::synth::SensorSettings,
+) -> Vec<crate::metrics::association_purity::AssociatedObject> {
+    use crate::dataset::FrameSource;
+    use crate::synth::{Preset, SyntheticScene};
+    let exact = SyntheticScene::generate(seed, Preset::Small).expect("scene");
+    let noisy = SyntheticScene::generate(seed, Preset::Small)
+        .expect("scene")
+        .with_sensor(sensor);
+    let cfg = ObjectConfig::default();
+    let mut tracker = InstanceTracker::default();
+    let mut tally = crate::metrics::association_purity::AssociationTally::default();
+    for i in 0..noisy.len() {
+        let frame = noisy.read_frame(i).expect("frame");
+        let (relabelled, _) = associate_frame(&mut tracker, &frame, &observe_objects(&frame, &cfg), &cfg);
+        tally.add(&relabelled.instances, &exact.read_frame(i).expect("frame").instances);
+    }
+    tally.objects()
+}
+
+#[test]
+fn per_frame_ids_of_a_small_scene_give_its_six_objects_each_pure() {
+    use crate::synth::{InstanceIds, SensorModel, SensorSettings};
+    let exact_masks = SensorSettings {
+        model: SensorModel::None,
+        ids: InstanceIds::PerFrame,
+    };
+    let objects = associate_small_scene(4, exact_masks);
+    assert_eq!(objects.len(), 6, "{objects:?}");
+    assert!(objects.iter().all(|o| o.purity == 1.0), "{objects:?}");
+    let truths: BTreeSet<ObjectId> = objects.iter().map(|o| o.truth).collect();
+    assert_eq!(truths.len(), 6, "one object per ground-truth object: {objects:?}");
+
+    let kinect = SensorSettings {
+        model: SensorModel::Kinect,
+        ids: InstanceIds::PerFrame,
+    };
+    let objects = associate_small_scene(4, kinect);
+    assert!((5..=7).contains(&objects.len()), "the truth's six, ± 1: {objects:?}");
+    assert!(objects.iter().all(|o| o.purity >= 0.95), "{objects:?}");
+}

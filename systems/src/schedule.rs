@@ -23,7 +23,7 @@ use crate::stages::log_rerun::{
 use crate::stages::log_stream::log_live_stream;
 use crate::stages::meshes::{extract_preview_meshes, final_meshes, warn_missing_meshes};
 use crate::stages::register::register_categories;
-use crate::stages::segment::{associate_masks, observe_frames};
+use crate::stages::segment::{associate_masks, observe_frames, trim_masks};
 use crate::stages::tick::{advance_run_phase, queue_tick_steps, start_tick_clock, stop_train_clock};
 use crate::stages::track::{record_background_views, record_object_views, spawn_new_objects};
 use crate::stages::train::{attach_fields, train_fields};
@@ -114,7 +114,7 @@ pub fn build_schedule() -> Schedule {
             .run_if(resource_exists::<LiveTicks>)
             .in_set(MapperSystems::Tick),
         ingest_frames.in_set(MapperSystems::Ingest),
-        (observe_frames, associate_masks.run_if(per_frame_instances))
+        (trim_masks, observe_frames, associate_masks.run_if(per_frame_instances))
             .chain()
             .in_set(MapperSystems::Segment),
         (spawn_new_objects, record_object_views, record_background_views)

@@ -4,6 +4,7 @@ use bevy_ecs::prelude::*;
 use catmap::RgbdFrame;
 use catmap::objects::frame_observation::{FrameObservation, observe_objects};
 use catmap::objects::instance_association::{InstanceSource, associate_frame};
+use catmap::objects::mask_trim::trim_bleeding_masks;
 
 use crate::components::{CameraFrame, FrameObservations};
 use crate::resources::{Association, Settings, SmallInstances, StageTimes};
@@ -23,6 +24,20 @@ pub fn observe_frames(
             count_small(&mut small, &frame.0, &observation);
         }
         commands.entity(entity).insert(FrameObservations(observation));
+    }
+}
+
+/// Mask pixels that bleed past their object onto what lies behind become unknown.
+pub fn trim_masks(
+    settings: Res<Settings>,
+    mut frames: Query<&mut CameraFrame, Added<CameraFrame>>,
+    mut times: ResMut<StageTimes>,
+) {
+    let _timer = times.start("masks");
+    for mut frame in &mut frames {
+        if let Some(trimmed) = trim_bleeding_masks(&frame.0, &settings.0.objects) {
+            frame.0 = std::sync::Arc::new(trimmed);
+        }
     }
 }
 

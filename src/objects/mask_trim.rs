@@ -1,0 +1,132 @@
+//! Masks that bleed past their object: a 2D segmenter's mask often covers a pixel or two of what
+//! lies behind the object (a wall, the floor a few metres back). Back-projected, those pixels put
+//! wall points into the object's cloud, and its box grows by metres.
+//!
+//! [`trim_bleeding_masks`] labels such pixels [`InstanceLabel::Unknown`]: an object pixel whose
+//! depth lies more than `bleed_depth_m` beyond the nearest pixel of the same object within
+//! `bleed_radius_px` (a square window). A pixel on the object itself has a neighbour of its
+//! object at about its own depth; a pixel past the object's silhouette has the silhouette much
+//! nearer. Where an object hides part of itself (a chair's back leg beside its front leg), the
+//! hidden part's edge pixels are trimmed too; with exact masks nothing else changes.
+
+use crate::objects::config::ObjectConfig;
+use crate::sensor::frame::{InstanceLabel, RgbdFrame};
+
+/// `frame` with its bleeding mask pixels unknown (module doc), or `None` when none bleeds or
+/// `bleed_radius_px` is 0.
+pub fn trim_bleeding_masks(frame: &RgbdFrame, cfg: &ObjectConfig) -> Option<RgbdFrame> {
+    let r = cfg.bleed_radius_px as i64;
+    if r == 0 {
+        return None;
+    }
+    let (w, h) = (frame.intrinsics.width as i64, frame.intrinsics.height as i64);
+    let at = |u: i64, v: i64| (v * w + u) as usize;
+    let trimmed: Vec<usize> = (0..frame.instances.len())
+        .filter(|&i| {
+            let Some(id) = frame.instances.object_at(i) else {
+                return false;
+            };
+            let z = frame.depth_m[i];
+            if z <= 0.0 {
+                return false;
+            }
+            let (u, v) = ((i as i64) % w, (i as i64) / w);
+            let mut nearest = f32::INFINITY;
+            for y in (v - r).max(0)..=(v + r).min(h - 1) {
+                for x in (u - r).max(0)..=(u + r).min(w - 1) {
+                    let j = at(x, y);
+                    let d = frame.depth_m[j];
+                    if d > 0.0 && d < nearest && frame.instances.object_at(j) == Some(id) {
+                        nearest = d;
+                    }
+                }
+            }
+            z - nearest > cfg.bleed_depth_m
+        })
+        .collect();
+    if trimmed.is_empty() {
+        return None;
+    }
+    let mut out = frame.clone();
+    for i in trimmed {
+        out.instances.set(i, InstanceLabel::Unknown);
+    }
+    Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Isometry3;
+
+    use super::*;
+    use crate::ids::{ClassId, FrameIndex, ObjectId};
+    use crate::sensor::frame::{CameraIntrinsics, InstanceMask};
+
+    /// A 20×10 frame: a wall at 3 m, object 4 at 1.5 m in columns 5..12; the mask covers columns
+    /// `mask_from..mask_to`.
+    fn frame(mask_from: u32, mask_to: u32) -> RgbdFrame {
+        let (w, h) = (20u32, 10u32);
+        let n = (w * h) as usize;
+        let column = |i: usize| i as u32 % w;
+        RgbdFrame {
+            index: FrameIndex(0),
+            world_from_camera: Isometry3::identity(),
+            intrinsics: CameraIntrinsics {
+                width: w,
+                height: h,
+                fx: 10.0,
+                fy: 10.0,
+                cx: 9.5,
+                cy: 4.5,
+            },
+            rgb: vec![[0; 3]; n],
+            depth_m: (0..n)
+                .map(|i| if (5..12).contains(&column(i)) { 1.5 } else { 3.0 })
+                .collect(),
+            instances: InstanceMask::from_labels((0..n).map(|i| {
+                if (mask_from..mask_to).contains(&column(i)) {
+                    InstanceLabel::Object(ObjectId(4))
+                } else {
+                    InstanceLabel::Background
+                }
+            })),
+            classes: vec![ClassId(20); n],
+        }
+    }
+
+    fn labels_of_row(f: &RgbdFrame) -> Vec<InstanceLabel> {
+        (0..20).map(|i| f.instances.label(i)).collect()
+    }
+
+    #[test]
+    fn the_wall_pixels_a_mask_bled_onto_become_unknown_and_the_object_stays() {
+        let cfg = ObjectConfig {
+            bleed_radius_px: 2,
+            ..ObjectConfig::default()
+        };
+        let trimmed = trim_bleeding_masks(&frame(3, 14), &cfg).expect("the mask bleeds two columns each side");
+        let row = labels_of_row(&trimmed);
+        for u in [3, 4, 12, 13] {
+            assert_eq!(row[u], InstanceLabel::Unknown, "column {u} shows the wall");
+        }
+        for u in 5..12 {
+            assert_eq!(
+                row[u],
+                InstanceLabel::Object(ObjectId(4)),
+                "column {u} shows the object"
+            );
+        }
+        assert_eq!(row[2], InstanceLabel::Background);
+    }
+
+    #[test]
+    fn an_exact_mask_is_left_alone_and_a_radius_of_zero_trims_nothing() {
+        let cfg = ObjectConfig {
+            bleed_radius_px: 2,
+            ..ObjectConfig::default()
+        };
+        assert!(trim_bleeding_masks(&frame(5, 12), &cfg).is_none());
+        let off = ObjectConfig::default();
+        assert!(trim_bleeding_masks(&frame(3, 14), &off).is_none());
+    }
+}
