@@ -109,9 +109,9 @@ mod tests {
         for u in [3, 4, 12, 13] {
             assert_eq!(row[u], InstanceLabel::Unknown, "column {u} shows the wall");
         }
-        for u in 5..12 {
+        for (u, label) in row.iter().enumerate().take(12).skip(5) {
             assert_eq!(
-                row[u],
+                *label,
                 InstanceLabel::Object(ObjectId(4)),
                 "column {u} shows the object"
             );
