@@ -1,7 +1,7 @@
 //! Association benchmark: per-frame masks of a synthetic scene seen through the Kinect-like
 //! sensor, associated into objects (no fields, no training) and checked against the exact render.
 //!
-//! `cargo run --release --features bench --example bench_association -- [--preset default|living|small] [--seeds 0,1,2,3] [--noise none|kinect]`
+//! `cargo run --release --features bench --example bench_association -- [--preset default|living|small] [--seeds 0,1,2,3] [--noise none|kinect] [--config 'TOML of objects.association']`
 //! prints, per scene, the objects made against the ground truth's, each object's purity (the
 //! share of its pixels that show its main ground-truth object; `catmap::metrics::association_purity`),
 //! ground-truth objects no object covers, and the association's milliseconds per frame.
@@ -37,7 +37,13 @@ fn main() -> Result<()> {
         .split(',')
         .map(|s| s.trim().parse().context("--seeds is a comma-separated list"))
         .collect::<Result<_>>()?;
-    let cfg = ObjectConfig::default();
+    let cfg = ObjectConfig {
+        association: match flag("--config") {
+            Some(text) => toml::from_str(text).context("--config is not an association config")?,
+            None => Default::default(),
+        },
+        ..ObjectConfig::default()
+    };
     for seed in seeds {
         let exact = SyntheticScene::generate(seed, preset)?;
         let truth_count = exact.objects().len();
