@@ -267,7 +267,7 @@ mod tests {
     #[test]
     fn a_written_summary_names_each_objects_class_from_its_file_or_its_folder() {
         let dir = tempfile::tempdir().expect("temp dir");
-        let mut summary = summary_with(vec![row(3, 20), row(5, 9)]);
+        let mut summary = summary_with(vec![row(3, 20), row(5, 200)]);
         summary.finishing_steps.insert(
             "eval".to_owned(),
             StepOutcome::Failed {
@@ -282,7 +282,7 @@ mod tests {
         }
         let classes = summary.object_classes();
         assert_eq!(classes[&ObjectId(3)].name, "chair");
-        assert_eq!(classes[&ObjectId(5)].name, "class 9", "a class without a known name");
+        assert_eq!(classes[&ObjectId(5)].name, "class 200", "a class without a known name");
         let text = std::fs::read_to_string(&path).expect("readable");
         assert!(
             text.contains(r#""outcome": "failed""#) && text.contains("obj_3.ply"),
