@@ -332,6 +332,26 @@ pub fn associate_frame(
     (relabelled, observation)
 }
 
+/// The segment stage's work on one frame: bleeding mask pixels trimmed (`bleed_radius_px`),
+/// the pixels grouped by object, and, with per-frame ids, the masks associated into objects by
+/// `tracker`. Returns the frame when it changed, and its observation.
+pub fn segment_frame(
+    frame: &RgbdFrame,
+    cfg: &ObjectConfig,
+    tracker: &mut InstanceTracker,
+) -> (Option<RgbdFrame>, FrameObservation) {
+    let trimmed = crate::objects::mask_trim::trim_bleeding_masks(frame, cfg);
+    let frame_now = trimmed.as_ref().unwrap_or(frame);
+    let observation = observe_objects(frame_now, cfg);
+    match cfg.association.instances {
+        InstanceSource::Consistent => (trimmed, observation),
+        InstanceSource::PerFrame => {
+            let (relabelled, observation) = associate_frame(tracker, frame_now, &observation, cfg);
+            (Some(relabelled), observation)
+        }
+    }
+}
+
 /// `frame` with its masks renamed as `fates` says: a mask that shows an object gets its id; a
 /// held-back mask, and any mask `fates` does not name, becomes unknown.
 pub fn relabel_instances(frame: &RgbdFrame, fates: &BTreeMap<ObjectId, MaskFate>) -> RgbdFrame {

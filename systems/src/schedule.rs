@@ -23,7 +23,7 @@ use crate::stages::log_rerun::{
 use crate::stages::log_stream::log_live_stream;
 use crate::stages::meshes::{extract_preview_meshes, final_meshes, warn_missing_meshes};
 use crate::stages::register::register_categories;
-use crate::stages::segment::{associate_masks, observe_frames, trim_masks};
+use crate::stages::segment::observe_frames;
 use crate::stages::tick::{advance_run_phase, queue_tick_steps, start_tick_clock, stop_train_clock};
 use crate::stages::track::{record_background_views, record_object_views, spawn_new_objects};
 use crate::stages::train::{attach_fields, train_fields};
@@ -114,9 +114,7 @@ pub fn build_schedule() -> Schedule {
             .run_if(resource_exists::<LiveTicks>)
             .in_set(MapperSystems::Tick),
         ingest_frames.in_set(MapperSystems::Ingest),
-        (trim_masks, observe_frames, associate_masks.run_if(per_frame_instances))
-            .chain()
-            .in_set(MapperSystems::Segment),
+        observe_frames.in_set(MapperSystems::Segment),
         (spawn_new_objects, record_object_views, record_background_views)
             .chain()
             .in_set(MapperSystems::Track),
@@ -191,11 +189,6 @@ fn in_phase(phases: &'static [RunPhase]) -> impl FnMut(Res<CurrentPhase>) -> boo
 /// (`catmap::training::PhasePlan::category_fields_follow`).
 fn category_fields_follow(settings: Res<Settings>, phase: Res<CurrentPhase>) -> bool {
     settings.0.phase_plan().category_fields_follow(phase.0)
-}
-
-/// Whether the dataset's instance ids are per frame (masks are associated into objects).
-fn per_frame_instances(settings: Res<Settings>) -> bool {
-    settings.0.objects.association.instances == catmap::objects::instance_association::InstanceSource::PerFrame
 }
 
 /// Whether this tick, after the stream, trained the category fields.
