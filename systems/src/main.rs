@@ -85,21 +85,46 @@ mod tests {
 
     use super::Cli;
 
-    /// The README's `catmap …` command lines: inline code spans, and lines of code blocks
-    /// (`cargo run --release -- ARGS` counts as `catmap ARGS`), split at `&&` and `;`.
-    fn readme_command_lines() -> Vec<String> {
-        let readme = include_str!("../../README.md");
-        let (mut prose, mut commands) = (String::new(), Vec::new());
-        let mut in_block = false;
-        for line in readme.lines() {
+    /// The pages whose command lines are checked: the README and every page of `docs/` (a test
+    /// below keeps this list equal to the folder).
+    const PAGES: [(&str, &str); 10] = [
+        ("README.md", include_str!("../../README.md")),
+        ("docs/ARCHITECTURE.md", include_str!("../../docs/ARCHITECTURE.md")),
+        ("docs/BENCHMARKS.md", include_str!("../../docs/BENCHMARKS.md")),
+        ("docs/CONFIG.md", include_str!("../../docs/CONFIG.md")),
+        ("docs/DEVELOPMENT.md", include_str!("../../docs/DEVELOPMENT.md")),
+        ("docs/METHOD.md", include_str!("../../docs/METHOD.md")),
+        ("docs/RERUN.md", include_str!("../../docs/RERUN.md")),
+        ("docs/RESULTS.md", include_str!("../../docs/RESULTS.md")),
+        ("docs/ROBUSTNESS.md", include_str!("../../docs/ROBUSTNESS.md")),
+        ("docs/USAGE.md", include_str!("../../docs/USAGE.md")),
+    ];
+
+    /// A page's `catmap …` command lines: inline code spans, and lines of code blocks
+    /// (`cargo run --release -- ARGS` counts as `catmap ARGS`; the indented lines that follow
+    /// one continue it), split at `&&` and `;`.
+    fn command_lines(page: &str) -> Vec<String> {
+        let (mut prose, mut commands) = (String::new(), Vec::<String>::new());
+        let (mut in_block, mut continues) = (false, false);
+        for line in page.lines() {
             if line.trim_start().starts_with("```") {
                 in_block = !in_block;
+                continues = false;
             } else if in_block {
+                let indented = line.starts_with(' ');
                 let line = line.split(" #").next().unwrap_or("").trim();
                 if let Some(args) = line.strip_prefix("cargo run --release -- ") {
                     commands.push(format!("catmap {args}"));
+                    continues = true;
                 } else if line.starts_with("catmap ") {
                     commands.push(line.to_owned());
+                    continues = true;
+                } else if continues && indented && !line.is_empty() {
+                    let last = commands.last_mut().expect("a command to continue");
+                    last.push(' ');
+                    last.push_str(line);
+                } else {
+                    continues = false;
                 }
             } else {
                 prose.push_str(line);
@@ -117,6 +142,24 @@ mod tests {
             .map(|c| c.split('>').next().unwrap_or("").trim().to_owned())
             .filter(|c| c.starts_with("catmap"))
             .collect()
+    }
+
+    #[test]
+    fn the_pages_whose_command_lines_are_checked_are_the_readme_and_every_page_of_docs() {
+        let folder = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs");
+        let mut on_disk: Vec<String> = std::fs::read_dir(folder)
+            .expect("docs/ is readable")
+            .map(|entry| entry.expect("a docs/ entry").file_name().to_string_lossy().into_owned())
+            .filter(|name| name.ends_with(".md"))
+            .map(|name| format!("docs/{name}"))
+            .collect();
+        on_disk.sort();
+        let listed: Vec<String> = PAGES
+            .iter()
+            .map(|(name, _)| (*name).to_owned())
+            .filter(|name| name.starts_with("docs/"))
+            .collect();
+        assert_eq!(listed, on_disk, "list every page of docs/ in PAGES");
     }
 
     /// Every long option of the command line, with the subcommand it belongs to ("" at the top).
@@ -137,12 +180,17 @@ mod tests {
     }
 
     #[test]
-    fn every_catmap_command_line_in_the_readme_parses_and_every_option_it_names_exists() {
-        let commands = readme_command_lines();
-        assert!(commands.len() > 20, "the README's command lines: {commands:?}");
+    fn every_catmap_command_line_in_the_readme_and_docs_parses_and_every_option_it_names_exists() {
+        let commands: Vec<(&str, String)> = PAGES
+            .iter()
+            .flat_map(|(name, page)| command_lines(page).into_iter().map(move |c| (*name, c)))
+            .collect();
+        assert!(commands.len() > 20, "the pages' command lines: {commands:?}");
+        let in_readme = commands.iter().filter(|(name, _)| *name == "README.md").count();
+        assert!(in_readme > 10, "the README's command lines: {in_readme}");
         let options = long_options();
         let mut parsed = 0;
-        for command in &commands {
+        for (page, command) in &commands {
             let words: Vec<&str> = command.split_whitespace().collect();
             let sub = words.get(1).filter(|w| !w.starts_with('-')).copied().unwrap_or("run");
             for word in words.iter().filter(|w| w.contains("--")) {
@@ -150,7 +198,7 @@ mod tests {
                     let flag = flag.split('=').next().unwrap_or(flag);
                     assert!(
                         options.iter().any(|(s, o)| o == flag && (s == sub || s.is_empty())),
-                        "`{command}` names {flag}, which `catmap {sub}` does not have"
+                        "{page}: `{command}` names {flag}, which `catmap {sub}` does not have"
                     );
                 }
             }
@@ -162,7 +210,7 @@ mod tests {
             if words.len() == 2 && !words[1].starts_with('-') {
                 assert!(
                     Cli::command().get_subcommands().any(|s| s.get_name() == words[1]),
-                    "`{command}`: no such subcommand"
+                    "{page}: `{command}`: no such subcommand"
                 );
                 continue;
             }
@@ -183,7 +231,7 @@ mod tests {
                         e.kind(),
                         clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion
                     ),
-                    "`{command}` does not parse: {e}"
+                    "{page}: `{command}` does not parse: {e}"
                 );
             }
             parsed += 1;

@@ -162,4 +162,89 @@ mod tests {
         assert_eq!(category_loss(2), "training/loss/categories/2");
         assert!(RGB.starts_with(IMAGE) && IMAGE.starts_with(CAMERA) && CAMERA.starts_with(WORLD));
     }
+
+    /// Every owner entity; listing a new variant here is what the `match` below asks for.
+    fn every_owner_entity() -> Vec<OwnerEntity> {
+        use OwnerEntity::{
+            AlignedBox, Box, CarvingShare, Loss, Mesh, Points, Reliability, ShapeCodeNorm, Steps, TextureCodeNorm,
+        };
+        let all = vec![
+            Points,
+            Box,
+            AlignedBox,
+            Reliability,
+            Mesh,
+            Loss,
+            Steps,
+            CarvingShare,
+            ShapeCodeNorm,
+            TextureCodeNorm,
+        ];
+        for entity in &all {
+            match entity {
+                Points | Box | AlignedBox | Reliability | Mesh | Loss | Steps | CarvingShare | ShapeCodeNorm
+                | TextureCodeNorm => {}
+            }
+        }
+        all
+    }
+
+    /// Every entity path the mapper logs to, as a pattern: `{id}` for an object's id, `{n}` for
+    /// a category field's number.
+    fn every_path_pattern() -> Vec<String> {
+        const ID: u32 = 424_242;
+        const N: u32 = 31_337;
+        let object = |path: String| path.replace(&ID.to_string(), "{id}");
+        let mut paths: Vec<String> = [WORLD, CAMERA, IMAGE, RGB, DEPTH, INSTANCES, STREAM_RATE, STREAM_DROPPED]
+            .iter()
+            .map(|p| (*p).to_owned())
+            .collect();
+        paths.extend(
+            every_owner_entity()
+                .into_iter()
+                .map(|entity| object(of(Some(ObjectId(ID)), entity))),
+        );
+        // The background has a field and a mesh, no cloud, box, registration or codes.
+        paths.extend(
+            [
+                OwnerEntity::Mesh,
+                OwnerEntity::Loss,
+                OwnerEntity::Steps,
+                OwnerEntity::CarvingShare,
+            ]
+            .into_iter()
+            .map(|entity| of(None, entity)),
+        );
+        let category = |path: String| path.replace(&N.to_string(), "{n}");
+        paths.extend([category(category_loss(N)), category(category_carving_share(N))]);
+        paths
+    }
+
+    #[test]
+    fn docs_rerun_md_has_a_row_for_every_entity_path_and_no_other() {
+        let page = include_str!("../../docs/RERUN.md");
+        let rows: Vec<&str> = page
+            .lines()
+            .filter(|line| line.starts_with("| `"))
+            .filter_map(|row| row.split('`').nth(1))
+            .collect();
+        let paths = every_path_pattern();
+        let missing: Vec<&String> = paths.iter().filter(|p| !rows.contains(&p.as_str())).collect();
+        assert!(
+            missing.is_empty(),
+            "entity paths without a row in docs/RERUN.md: {missing:?}"
+        );
+        let stale: Vec<&&str> = rows.iter().filter(|r| !paths.iter().any(|p| p == *r)).collect();
+        assert!(
+            stale.is_empty(),
+            "rows of docs/RERUN.md naming no entity path: {stale:?}"
+        );
+        assert_eq!(rows.len(), paths.len(), "one row per path: {rows:?}");
+        for timeline in [FRAME_TIMELINE, CATEGORY_TIMELINE, WALL_CLOCK_TIMELINE] {
+            assert!(
+                page.contains(&format!("`{timeline}` (")),
+                "docs/RERUN.md names the timeline {timeline}"
+            );
+        }
+    }
 }
