@@ -12,6 +12,7 @@ pub mod replica;
 pub mod resize;
 pub mod scannet;
 pub mod stream;
+pub mod tum;
 
 use crate::dataset::class_names::ClassNames;
 use crate::error::Result;

@@ -5,7 +5,8 @@
 //! chairs tucked under it, a cabinet, a box, a lamp, a stool, a nightstand — and a camera walking
 //! along one side of the room so that every object is only partly observed. Frames are ray cast
 //! through a BVH on demand ([`SyntheticScene`] is a [`FrameSource`](crate::dataset::FrameSource)),
-//! and [`write_replica_layout`] writes them in the Replica vMAP layout with ground-truth meshes.
+//! and [`write_replica_layout`] writes them in the Replica vMAP layout with ground-truth meshes
+//! ([`write_tum_layout`]: in TUM RGB-D's layout with masks).
 //!
 //! ```no_run
 //! use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
@@ -30,6 +31,7 @@ pub mod room;
 pub mod scene;
 pub mod sensor_noise;
 pub mod trajectory;
+pub mod tum_writer;
 
 pub use description::{ObjectDescription, SceneDescription};
 pub use furniture::Design;
@@ -40,3 +42,4 @@ pub use replica_writer::write_replica_layout;
 pub use room::{Room, SurfaceLabel};
 pub use scene::{SceneObject, SyntheticScene};
 pub use sensor_noise::{InstanceIds, SensorModel, SensorSettings};
+pub use tum_writer::write_tum_layout;

@@ -134,7 +134,7 @@ fn depth_to_mm(depth_m: f32) -> u16 {
 }
 
 /// Encodes `bytes` (native-endian samples) as PNG into `path`.
-fn write_png(path: &Path, width: u32, height: u32, bytes: &[u8], color: ExtendedColorType) -> Result<()> {
+pub(super) fn write_png(path: &Path, width: u32, height: u32, bytes: &[u8], color: ExtendedColorType) -> Result<()> {
     write_atomic_with(path, |w| {
         PngEncoder::new_with_quality(w, CompressionType::Fast, FilterType::Sub)
             .write_image(bytes, width, height, color)
@@ -143,7 +143,7 @@ fn write_png(path: &Path, width: u32, height: u32, bytes: &[u8], color: Extended
 }
 
 /// Pretty-printed JSON into `path`.
-fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
+pub(super) fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
     let mut text = serde_json::to_string_pretty(value).map_err(|e| CatmapError::layout(path, e.to_string()))?;
     text.push('\n');
     write_atomic(path, text.as_bytes())

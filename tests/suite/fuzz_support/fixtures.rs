@@ -130,6 +130,58 @@ pub fn scannet_files(frames: usize) -> FileSet {
     files
 }
 
+/// TUM RGB-D fixture size (the camera of its `intrinsics.json`).
+pub const TUM_SIZE: (u32, u32) = (16, 12);
+
+/// Timestamps of TUM fixture frame `i` as written: colour image at 1 s + i / 30 s, depth image
+/// 4 ms later, pose 2 ms earlier.
+pub fn tum_stamps(i: usize) -> [String; 3] {
+    let t = 1.0 + i as f64 / 30.0;
+    [t, t + 0.004, t - 0.002].map(|s| format!("{s:.6}"))
+}
+
+/// TUM RGB-D layout with masks, `frames` frames of 16×12: the Replica fixture's chair and floor,
+/// depth 1 m + 1 cm per column in units of 0.2 mm, poses turning about z; a pose between frames.
+pub fn tum_files(frames: usize) -> FileSet {
+    let label = |u: u32, v: u32| match (u, v) {
+        (_, 9..) => (40u8, 5u16),
+        (3..11, 2..=7) => (20, 3),
+        _ => (0, 0),
+    };
+    let mut files = FileSet::new();
+    let mut rgb_txt = "# color images\n# timestamp filename\n".to_owned();
+    let mut depth_txt = "# depth maps\n# timestamp filename\n".to_owned();
+    let mut groundtruth = "# ground truth trajectory\n# timestamp tx ty tz qx qy qz qw\n".to_owned();
+    for i in 0..frames {
+        let [rgb, depth, pose] = tum_stamps(i);
+        let k = i as u8;
+        rgb_txt += &format!("{rgb} rgb/{rgb}.png\n");
+        depth_txt += &format!("{depth} depth/{depth}.png\n");
+        let (s, c) = (0.05 * i as f64).sin_cos();
+        groundtruth += &format!("{pose} {i} 0.5 1.2 0 0 {s} {c}\n");
+        groundtruth += &format!("{:.6} {i}.5 0.5 1.2 0 0 {s} {c}\n", 1.016 + i as f64 / 30.0);
+        files.insert(
+            format!("rgb/{rgb}.png"),
+            rgb_image(TUM_SIZE, ImageFormat::Png, |u, v| [u as u8 * 9, v as u8 * 11, k]),
+        );
+        files.insert(
+            format!("depth/{depth}.png"),
+            grey16_png(TUM_SIZE, |u, _| 5000 + 50 * u as u16),
+        );
+        files.insert(format!("class/{rgb}.png"), grey8_png(TUM_SIZE, |u, v| label(u, v).0));
+        files.insert(
+            format!("instance/{rgb}.png"),
+            grey16_png(TUM_SIZE, |u, v| label(u, v).1),
+        );
+    }
+    files.insert("rgb.txt".to_owned(), rgb_txt.into_bytes());
+    files.insert("depth.txt".to_owned(), depth_txt.into_bytes());
+    files.insert("groundtruth.txt".to_owned(), groundtruth.into_bytes());
+    let json = r#"{"width": 16, "height": 12, "fx": 12.0, "fy": 12.5, "cx": 7.5, "cy": 5.5}"#;
+    files.insert("intrinsics.json".to_owned(), json.as_bytes().to_vec());
+    files
+}
+
 /// One edit of a fixture folder.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum FolderEdit {

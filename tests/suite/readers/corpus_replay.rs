@@ -3,20 +3,21 @@
 //! a panic, never an accepted frame.
 //!
 //! Layout: `png/NAME` is decoded on its own as RGB, 8-bit grey and 16-bit grey; `config/NAME` is
-//! loaded as a config file; `replica/SLOT/NAME` and `scannet/SLOT/NAME` replace the file `SLOT`
-//! (e.g. `traj_w_c.txt`, `pose/0.txt`) of a small valid dataset folder, which is then opened and
-//! read frame by frame. Inputs the fuzzers (`tests/suite/readers/fuzz_readers.rs`) found are kept here with the
+//! loaded as a config file; `replica/SLOT/NAME`, `scannet/SLOT/NAME` and `tum/SLOT/NAME` replace
+//! the file `SLOT` (e.g. `traj_w_c.txt`, `pose/0.txt`, `rgb.txt`) of a small valid dataset folder,
+//! which is then opened and read frame by frame. Inputs the fuzzers (`tests/suite/readers/fuzz_readers.rs`) found are kept here with the
 //! iteration that found them in their name.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use crate::fuzz_support::fixtures::{FileSet, Folder, FolderEdit, replica_files, scannet_files};
+use crate::fuzz_support::fixtures::{FileSet, Folder, FolderEdit, replica_files, scannet_files, tum_files};
 use catmap::MapperConfig;
 use catmap::dataset::FrameSource;
 use catmap::dataset::images::{grey_from_bytes, grey16_from_bytes, rgb_from_bytes};
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
 use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
+use catmap::dataset::tum::{TumOptions, TumSequence};
 
 fn corpus_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/corpus")
@@ -104,6 +105,11 @@ fn replay(relative: &str) -> Result<Vec<(String, String)>, String> {
             let err = folder_error(scannet_files(2), slot, bytes, open).ok_or_else(accepted)?;
             Ok(vec![(err, slot_name)])
         }
+        "tum" => {
+            let open = |dir: &Path| TumSequence::open(dir, &TumOptions::default());
+            let err = folder_error(tum_files(3), slot, bytes, open).ok_or_else(accepted)?;
+            Ok(vec![(err, slot_name)])
+        }
         other => Err(format!("{relative}: unknown corpus kind {other:?}")),
     }
 }
@@ -118,6 +124,10 @@ fn the_pristine_fixtures_are_read_without_error() {
     let sequence = ScanNetSequence::open(scannet.path(), &ScanNetOptions::default()).expect("valid ScanNet fixture");
     assert_eq!(sequence.len(), 2);
     (0..2).for_each(|p| drop(sequence.read_frame(p).expect("valid frame")));
+    let tum = Folder::new(tum_files(3));
+    let sequence = TumSequence::open(tum.path(), &TumOptions::default()).expect("valid TUM fixture");
+    assert_eq!(sequence.len(), 3);
+    (0..3).for_each(|p| drop(sequence.read_frame(p).expect("valid frame")));
 }
 
 #[test]

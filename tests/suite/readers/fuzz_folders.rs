@@ -1,6 +1,7 @@
-//! Fuzzing of the Replica and ScanNet folder readers (issue 6, Resilience): a small valid folder
-//! with one file replaced (format-aware mutation, another file's bytes, empty), deleted, renamed or
-//! turned into a folder; every frame is read. Same harness and settings as `fuzz_readers.rs`:
+//! Fuzzing of the Replica, ScanNet and TUM RGB-D folder readers (issue 6, Resilience): a small
+//! valid folder with one file replaced (format-aware mutation, another file's bytes, empty),
+//! deleted, renamed or turned into a folder; every frame is read. Same harness and settings as
+//! `fuzz_readers.rs`:
 //!
 //! ```text
 //! CATMAP_FUZZ_SECONDS=600 cargo test --test suite readers::fuzz_folders -- --nocapture --test-threads 1
@@ -9,13 +10,14 @@
 use std::path::Path;
 
 use crate::fuzz_support::checks::check_frame;
-use crate::fuzz_support::fixtures::{FileSet, Folder, FolderEdit, replica_files, scannet_files};
+use crate::fuzz_support::fixtures::{FileSet, Folder, FolderEdit, replica_files, scannet_files, tum_files};
 use crate::fuzz_support::mutate::{mutate_bytes, mutate_text};
 use crate::fuzz_support::png::{generate_png, mutate_png};
 use crate::fuzz_support::{Execution, Verdict, fuzz, pick, rejected_naming_one_of};
 use catmap::dataset::FrameSource;
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
 use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
+use catmap::dataset::tum::{TumOptions, TumSequence};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
@@ -129,6 +131,23 @@ fn scannet_folders_with_a_damaged_file_never_panic_and_errors_name_the_file() {
     let execute = |edit: &FolderEdit| read_all(&folder, edit, open);
     fuzz(
         "scannet_folder",
+        |rng| folder_edit(&files, rng),
+        execute,
+        FolderEdit::describe,
+    );
+}
+
+/// The TUM RGB-D reader: its three lists (`rgb.txt`, `depth.txt`, `groundtruth.txt`) mutated as
+/// text, its images and masks as PNG; a colour image that loses its masks or its match in time is
+/// skipped, so such edits are accepted.
+#[test]
+fn tum_folders_with_a_damaged_file_never_panic_and_errors_name_the_file() {
+    let folder = Folder::new(tum_files(3));
+    let files = folder.files().clone();
+    let open = |dir: &Path| TumSequence::open(dir, &TumOptions::default());
+    let execute = |edit: &FolderEdit| read_all(&folder, edit, open);
+    fuzz(
+        "tum_folder",
         |rng| folder_edit(&files, rng),
         execute,
         FolderEdit::describe,

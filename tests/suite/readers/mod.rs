@@ -1,8 +1,9 @@
-//! Reading datasets: the Replica and ScanNet readers, the corpus of inputs the fuzzers found, and the
-//! fuzzers themselves (`fuzz_readers`, `fuzz_folders`).
+//! Reading datasets: the Replica, ScanNet and TUM RGB-D readers, the corpus of inputs the fuzzers
+//! found, and the fuzzers themselves (`fuzz_readers`, `fuzz_folders`).
 
 mod corpus_replay;
 mod fuzz_folders;
 mod fuzz_readers;
 mod replica;
 mod scannet;
+mod tum;

@@ -1,0 +1,173 @@
+//! Writes a synthetic scene in TUM RGB-D's layout with a segmenter's masks beside it (the layout
+//! [`crate::dataset::tum`] reads), plus its ground truth:
+//!
+//! ```text
+//! rgb.txt, depth.txt           `# ` header lines, then `timestamp path` per frame
+//! groundtruth.txt              `timestamp tx ty tz qx qy qz qw` per frame: world_from_camera
+//! rgb/{t}.png                  8-bit RGB, t = the colour image's timestamp with 6 decimals
+//! depth/{d}.png                16-bit grey, 5000 units per metre (TUM's), 0 = invalid
+//! instance/{t}.png             16-bit grey instance id, 0 = none
+//! class/{t}.png                8-bit grey class id (Replica's)
+//! intrinsics.json              width, height, fx, fy, cx, cy, depth_scale (5000)
+//! scene.json, gt_meshes/       as the Replica writer's
+//! ```
+//!
+//! Frame `i`'s colour image is taken at [`START_S`] + i / 30 s, its depth image
+//! [`DEPTH_DELAY_S`] later and its pose stamped [`POSE_LEAD_S`] earlier: like TUM's streams, the
+//! three are not simultaneous, and a reader has to associate them by nearest timestamp.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use image::ExtendedColorType;
+use rayon::prelude::*;
+
+use super::description::SceneDescription;
+use super::render::RenderedFrame;
+use super::replica_writer::{write_json, write_png};
+use super::scene::SyntheticScene;
+use crate::atomic_file::write_atomic;
+use crate::dataset::FrameSource;
+use crate::dataset::tum::TUM_DEPTH_SCALE;
+use crate::error::{CatmapError, Result};
+
+/// Timestamp of the first colour image, seconds (a Unix time, as TUM's are).
+pub const START_S: f64 = 1_700_000_000.0;
+/// Frames per second.
+pub const FRAME_RATE_HZ: f64 = 30.0;
+/// How much later than its colour image a frame's depth image is stamped, seconds.
+pub const DEPTH_DELAY_S: f64 = 0.004;
+/// How much earlier than its colour image a frame's pose is stamped, seconds.
+pub const POSE_LEAD_S: f64 = 0.002;
+
+/// Timestamp of frame `i`'s colour image, as written (6 decimals).
+pub fn rgb_timestamp(i: usize) -> String {
+    format!("{:.6}", START_S + i as f64 / FRAME_RATE_HZ)
+}
+
+fn depth_timestamp(i: usize) -> String {
+    format!("{:.6}", START_S + i as f64 / FRAME_RATE_HZ + DEPTH_DELAY_S)
+}
+
+fn pose_timestamp(i: usize) -> String {
+    format!("{:.6}", START_S + i as f64 / FRAME_RATE_HZ - POSE_LEAD_S)
+}
+
+/// Writes `scene` into `dir` (created if missing) in TUM's layout. `progress(done, total)` is
+/// called from worker threads after each frame. Errors name the file that failed.
+pub fn write_tum_layout(scene: &SyntheticScene, dir: &Path, progress: impl Fn(usize, usize) + Sync) -> Result<()> {
+    for sub in ["rgb", "depth", "instance", "class", "gt_meshes"] {
+        let path = dir.join(sub);
+        std::fs::create_dir_all(&path).map_err(|e| CatmapError::io(path, e))?;
+    }
+    let total = scene.len();
+    let done = AtomicUsize::new(0);
+    (0..total).into_par_iter().try_for_each(|i| {
+        write_frame(dir, i, &scene.render(i)?)?;
+        progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+        Ok::<_, CatmapError>(())
+    })?;
+    let list = |what: &str, stamp: fn(usize) -> String| {
+        let header = format!("# {what} images\n# file: 'catmap synth'\n# timestamp filename\n");
+        let lines: String = (0..total)
+            .map(|i| format!("{} {what}/{}.png\n", stamp(i), stamp(i)))
+            .collect();
+        header + &lines
+    };
+    write_atomic(&dir.join("rgb.txt"), list("rgb", rgb_timestamp).as_bytes())?;
+    write_atomic(&dir.join("depth.txt"), list("depth", depth_timestamp).as_bytes())?;
+    let poses: String = scene
+        .trajectory()
+        .iter()
+        .enumerate()
+        .map(|(i, pose)| {
+            let (t, q) = (pose.translation.vector, pose.rotation);
+            let (x, y, z, w) = (q.i, q.j, q.k, q.w);
+            format!("{} {} {} {} {x} {y} {z} {w}\n", pose_timestamp(i), t.x, t.y, t.z)
+        })
+        .collect();
+    let header = "# ground truth trajectory\n# file: 'catmap synth'\n# timestamp tx ty tz qx qy qz qw\n";
+    write_atomic(&dir.join("groundtruth.txt"), (header.to_owned() + &poses).as_bytes())?;
+    let k = scene.intrinsics();
+    let intrinsics = serde_json::json!({
+        "width": k.width, "height": k.height, "fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy,
+        "depth_scale": TUM_DEPTH_SCALE,
+    });
+    write_json(&dir.join("intrinsics.json"), &intrinsics)?;
+    write_json(&dir.join("scene.json"), &SceneDescription::of(scene))?;
+    for object in scene.objects() {
+        object
+            .surface_in_world
+            .write_ply(&dir.join("gt_meshes").join(format!("obj_{}.ply", object.id)))?;
+    }
+    Ok(())
+}
+
+/// Writes the four images of frame `i`.
+fn write_frame(dir: &Path, i: usize, frame: &RenderedFrame) -> Result<()> {
+    let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
+    let (stamp, depth_stamp) = (rgb_timestamp(i), depth_timestamp(i));
+    let rgb: Vec<u8> = frame.rgb.iter().flatten().copied().collect();
+    write_png(
+        &dir.join(format!("rgb/{stamp}.png")),
+        w,
+        h,
+        &rgb,
+        ExtendedColorType::Rgb8,
+    )?;
+    let depth: Vec<u8> = frame
+        .depth_m
+        .iter()
+        .flat_map(|&d| depth_to_units(d).to_ne_bytes())
+        .collect();
+    let depth_path = dir.join(format!("depth/{depth_stamp}.png"));
+    write_png(&depth_path, w, h, &depth, ExtendedColorType::L16)?;
+    let classes: Vec<u8> = frame.classes.iter().map(|c| u8::try_from(c.0).unwrap_or(0)).collect();
+    write_png(
+        &dir.join(format!("class/{stamp}.png")),
+        w,
+        h,
+        &classes,
+        ExtendedColorType::L8,
+    )?;
+    let instances: Vec<u8> = frame.instance_ids.iter().flat_map(|id| id.to_ne_bytes()).collect();
+    write_png(
+        &dir.join(format!("instance/{stamp}.png")),
+        w,
+        h,
+        &instances,
+        ExtendedColorType::L16,
+    )
+}
+
+/// Depth in metres → TUM's units (0.2 mm); invalid or unrepresentable depths (beyond 13.1 m)
+/// become 0.
+fn depth_to_units(depth_m: f32) -> u16 {
+    let units = (depth_m * TUM_DEPTH_SCALE).round();
+    if units > 0.0 && units <= f32::from(u16::MAX) {
+        units as u16
+    } else {
+        0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn depth_is_written_in_fifths_of_a_millimetre_and_clamped_to_invalid() {
+        assert_eq!(depth_to_units(1.2344), 6172);
+        assert_eq!(depth_to_units(0.0), 0);
+        assert_eq!(depth_to_units(f32::NAN), 0);
+        assert_eq!(depth_to_units(13.2), 0, "beyond 13.107 m is not representable");
+    }
+
+    #[test]
+    fn timestamps_are_30_hz_with_depth_after_and_pose_before_the_colour_image() {
+        assert_eq!(rgb_timestamp(0), "1700000000.000000");
+        assert_eq!(rgb_timestamp(3), "1700000000.100000");
+        assert_eq!(depth_timestamp(3), "1700000000.104000");
+        assert_eq!(pose_timestamp(3), "1700000000.098000");
+    }
+}
