@@ -67,15 +67,22 @@ pub fn write_tum_layout(scene: &SyntheticScene, dir: &Path, progress: impl Fn(us
         progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
         Ok::<_, CatmapError>(())
     })?;
-    let list = |what: &str, stamp: fn(usize) -> String| {
-        let header = format!("# {what} images\n# file: 'catmap synth'\n# timestamp filename\n");
+    // The header lines of TUM's own files.
+    let list = |title: &str, folder: &str, stamp: fn(usize) -> String| {
+        let header = format!("# {title}\n# file: 'catmap synth'\n# timestamp filename\n");
         let lines: String = (0..total)
-            .map(|i| format!("{} {what}/{}.png\n", stamp(i), stamp(i)))
+            .map(|i| format!("{} {folder}/{}.png\n", stamp(i), stamp(i)))
             .collect();
         header + &lines
     };
-    write_atomic(&dir.join("rgb.txt"), list("rgb", rgb_timestamp).as_bytes())?;
-    write_atomic(&dir.join("depth.txt"), list("depth", depth_timestamp).as_bytes())?;
+    write_atomic(
+        &dir.join("rgb.txt"),
+        list("color images", "rgb", rgb_timestamp).as_bytes(),
+    )?;
+    write_atomic(
+        &dir.join("depth.txt"),
+        list("depth maps", "depth", depth_timestamp).as_bytes(),
+    )?;
     let poses: String = scene
         .trajectory()
         .iter()

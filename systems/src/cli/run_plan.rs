@@ -1,7 +1,7 @@
 //! [`RunPlan`]: what `catmap run` was asked to do, kept in each checkpoint so that
 //! `catmap run --resume OUT` can continue without the original command line.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::Context as _;
@@ -10,6 +10,7 @@ use catmap::dataset::FrameSource;
 use catmap::dataset::camera_spec::parse_camera_spec;
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
 use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
+use catmap::dataset::tum::{TumOptions, TumSequence};
 use serde::{Deserialize, Serialize};
 
 use catmap_systems::rrd_file::{RrdFooter, save_rrd};
@@ -30,6 +31,23 @@ pub enum DatasetFormat {
     Replica,
     /// ScanNet (SensReader output + 2D labels).
     Scannet,
+    /// TUM RGB-D (rgb.txt, depth.txt, groundtruth.txt) with masks in instance/ and class/; the
+    /// default `replica` opens such a folder as this too.
+    Tum,
+}
+
+impl DatasetFormat {
+    /// The layout `dir` is opened with: `self`, except that under the default (`replica`) a
+    /// folder in TUM RGB-D's layout — `rgb.txt` and `depth.txt`, no `traj_w_c.txt` — is TUM's.
+    pub fn resolve(self, dir: &Path) -> Self {
+        let is_file = |name: &str| dir.join(name).is_file();
+        if self == Self::Replica && is_file("rgb.txt") && is_file("depth.txt") && !is_file("traj_w_c.txt") {
+            tracing::debug!(dir = %dir.display(), "rgb.txt and depth.txt: opened in TUM RGB-D's layout");
+            Self::Tum
+        } else {
+            self
+        }
+    }
 }
 
 /// Where the Rerun recording goes.
@@ -77,7 +95,7 @@ impl RunPlan {
             .transpose()
             .context("--camera")?;
         let dir = &self.dataset;
-        Ok(match self.format {
+        Ok(match self.format.resolve(dir) {
             DatasetFormat::Replica => {
                 let options = ReplicaOptions {
                     camera,
@@ -86,13 +104,26 @@ impl RunPlan {
                 Arc::new(ReplicaSequence::open(dir, &options)?)
             }
             DatasetFormat::Scannet => {
-                anyhow::ensure!(camera.is_none(), "--camera applies to the Replica layout only");
+                anyhow::ensure!(camera.is_none(), "--camera applies to the Replica and TUM layouts only");
                 let options = ScanNetOptions {
                     depth_scale: config.dataset.depth_scale,
                     max_depth_m: config.dataset.max_depth_m,
                     ..ScanNetOptions::default()
                 };
                 Arc::new(ScanNetSequence::open(dir, &options)?)
+            }
+            DatasetFormat::Tum => {
+                // TUM's depth scale is its own (intrinsics.json's `depth_scale`, else 5000) unless
+                // the config changes `dataset.depth_scale` from its (Replica's) default.
+                let default_scale = catmap::dataset::config::DatasetConfig::default().depth_scale;
+                let changed = config.dataset.depth_scale != default_scale;
+                let options = TumOptions {
+                    camera,
+                    depth_scale: changed.then_some(config.dataset.depth_scale),
+                    max_depth_m: config.dataset.max_depth_m,
+                    ..TumOptions::default()
+                };
+                Arc::new(TumSequence::open(dir, &options)?)
             }
         })
     }
@@ -145,5 +176,36 @@ impl RunPlan {
             Recording::Connect(url) => Ok(Some(url.clone())),
             Recording::Off => Ok(None),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_format_opens_a_folder_with_tums_lists_as_tum() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let dir = dir.path();
+        assert_eq!(
+            DatasetFormat::Replica.resolve(dir),
+            DatasetFormat::Replica,
+            "an empty folder"
+        );
+        for list in ["rgb.txt", "depth.txt"] {
+            std::fs::write(dir.join(list), "# a list\n").expect("list written");
+        }
+        assert_eq!(DatasetFormat::Replica.resolve(dir), DatasetFormat::Tum);
+        assert_eq!(
+            DatasetFormat::Scannet.resolve(dir),
+            DatasetFormat::Scannet,
+            "an explicit other format stays"
+        );
+        std::fs::write(dir.join("traj_w_c.txt"), "").expect("a Replica trajectory");
+        assert_eq!(
+            DatasetFormat::Replica.resolve(dir),
+            DatasetFormat::Replica,
+            "Replica's trajectory wins"
+        );
     }
 }

@@ -3,7 +3,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use catmap::synth::{InstanceIds, Preset, SensorModel, SensorSettings, SyntheticScene, write_replica_layout};
+use catmap::synth::{
+    InstanceIds, Preset, SensorModel, SensorSettings, SyntheticScene, write_replica_layout, write_tum_layout,
+};
 
 use crate::cli::progress::bar;
 
@@ -13,9 +15,13 @@ pub struct SynthArgs {
     /// Seed of the layout.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Output folder (Replica vMAP layout).
+    /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
+    /// Layout of the output folder: Replica's (vMAP's), or TUM RGB-D's with masks beside it
+    /// (`catmap run --dataset DIR` reads either).
+    #[arg(long, value_enum, default_value_t = LayoutArg::Replica)]
+    pub layout: LayoutArg,
     /// Scene size.
     #[arg(long, value_enum, default_value_t = PresetArg::Default)]
     pub preset: PresetArg,
@@ -26,6 +32,16 @@ pub struct SynthArgs {
     /// Instance ids: one per object over the sequence, or every frame its own.
     #[arg(long, value_enum, default_value_t = IdsArg::Consistent)]
     pub ids: IdsArg,
+}
+
+/// `--layout` values.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LayoutArg {
+    /// Replica in vMAP's layout: rgb/, depth/, semantic_class/, semantic_instance/, traj_w_c.txt.
+    Replica,
+    /// TUM RGB-D's: rgb.txt, depth.txt, groundtruth.txt with timestamps at 30 Hz, depth in units
+    /// of 0.2 mm, masks in instance/ and class/.
+    Tum,
 }
 
 /// `--noise` values.
@@ -88,22 +104,37 @@ impl From<PresetArg> for Preset {
 
 /// Runs `catmap synth`.
 pub fn synth(args: &SynthArgs) -> anyhow::Result<()> {
-    write_scene(args.seed, args.preset.into(), args.sensor(), &args.out)?;
+    write_scene_as(args.layout, args.seed, args.preset.into(), args.sensor(), &args.out)?;
     Ok(())
 }
 
-/// Generates and writes a scene with a progress bar; returns it.
+/// Generates and writes a scene in the Replica layout with a progress bar; returns it.
 pub fn write_scene(seed: u64, preset: Preset, sensor: SensorSettings, out: &Path) -> anyhow::Result<SyntheticScene> {
+    write_scene_as(LayoutArg::Replica, seed, preset, sensor, out)
+}
+
+/// Generates and writes a scene in `layout` with a progress bar; returns it.
+pub fn write_scene_as(
+    layout: LayoutArg,
+    seed: u64,
+    preset: Preset,
+    sensor: SensorSettings,
+    out: &Path,
+) -> anyhow::Result<SyntheticScene> {
     let scene = SyntheticScene::generate(seed, preset)
         .context("cannot generate the synthetic scene")?
         .with_sensor(sensor);
     let progress = bar(0, "synth");
-    write_replica_layout(&scene, out, |done, total| {
+    let report = |done: usize, total: usize| {
         progress.set_length(total as u64);
         progress.set_position(done as u64);
-    })
+    };
+    match layout {
+        LayoutArg::Replica => write_replica_layout(&scene, out, report),
+        LayoutArg::Tum => write_tum_layout(&scene, out, report),
+    }
     .with_context(|| format!("cannot write the synthetic scene to {}", out.display()))?;
     progress.finish_and_clear();
-    tracing::info!(dir = %out.display(), seed, "synthetic scene written");
+    tracing::info!(dir = %out.display(), seed, ?layout, "synthetic scene written");
     Ok(scene)
 }
