@@ -13,6 +13,8 @@
 //!   the files it lists; a dataset in the wrong layout, or none, is refused with the expected
 //!   files and the other format named, and leaves no output folder; `eval` on a folder without
 //!   predictions fails and says what to try; `catmap [run options]` and `--version`.
+//! - Issue 34 (`own_data`): the README's "Your own data" walk-through, run as written: a
+//!   synthetic sequence in TUM RGB-D's layout with per-frame masks, mapped.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -184,3 +186,4 @@ mod foreign;
 mod kill_resume;
 mod live;
 mod newcomer;
+mod own_data;

@@ -1,0 +1,96 @@
+//! Issue 34: the README's "Your own data" walk-through, run as written — `catmap synth --layout
+//! tum` writes a sequence in TUM RGB-D's layout with a segmenter's per-frame masks, and
+//! `catmap run --dataset DIR --instances per-frame` maps it (the layout found by its files).
+
+use super::*;
+
+/// The `catmap …` lines of the first code block of the README's "Your own data" section.
+fn walk_through_commands() -> Vec<String> {
+    let readme = include_str!("../../../README.md");
+    let section = readme
+        .split("\n## ")
+        .find(|s| s.starts_with("Your own data"))
+        .expect("the README has a \"Your own data\" section");
+    let block = section
+        .split("```")
+        .skip(1)
+        .step_by(2)
+        .find(|block| block.lines().any(|l| l.trim_start().starts_with("catmap ")))
+        .expect("a code block of catmap commands in \"Your own data\"");
+    block
+        .lines()
+        .map(|l| l.split(" #").next().unwrap_or("").trim())
+        .filter(|l| l.starts_with("catmap "))
+        .map(str::to_owned)
+        .collect()
+}
+
+/// Runs `command` (a `catmap …` line) with the folders after `--out` and `--dataset` placed in
+/// `work` and `more` appended.
+fn run_line(command: &str, work: &Path, more: &[&str]) -> Output {
+    let words: Vec<&str> = command.split_whitespace().skip(1).collect();
+    let mut process = catmap();
+    for (i, word) in words.iter().enumerate() {
+        let is_folder = i > 0 && ["--out", "--dataset"].contains(&words[i - 1]);
+        if is_folder {
+            process.arg(work.join(word));
+        } else {
+            process.arg(word);
+        }
+    }
+    process.args(more).output().expect("catmap runs")
+}
+
+#[test]
+fn the_readmes_own_data_walk_through_maps_a_tum_layout_sequence_with_per_frame_masks() {
+    let commands = walk_through_commands();
+    let [synth, run] = &commands[..] else {
+        panic!("two commands, synth then run: {commands:?}")
+    };
+    assert!(
+        synth.starts_with("catmap synth") && synth.contains("--layout tum"),
+        "{synth}"
+    );
+    assert!(
+        run.starts_with("catmap run") && run.contains("--instances per-frame"),
+        "{run}"
+    );
+    let work = tempfile::tempdir().expect("temp dir");
+    let work = work.path();
+    let output = run_line(synth, work, &[]);
+    assert!(
+        output.status.success(),
+        "{synth}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let dataset = std::fs::read_dir(work)
+        .expect("the synth output")
+        .map(|e| e.expect("entry").path())
+        .find(|p| p.is_dir())
+        .expect("a dataset folder");
+    for file in ["rgb.txt", "depth.txt", "groundtruth.txt", "intrinsics.json"] {
+        assert!(dataset.join(file).is_file(), "{file} written");
+    }
+    for folder in ["rgb", "depth", "instance", "class", "gt_meshes"] {
+        assert!(dataset.join(folder).is_dir(), "{folder}/ written");
+    }
+
+    // The quick config (a few frames, few steps) and no recording keep the run short.
+    std::fs::write(work.join("config.toml"), CONFIG).expect("config written");
+    let config = work.join("config.toml");
+    let config = config.to_str().expect("a UTF-8 temp path");
+    let output = run_line(run, work, &["--config", config, "--max-frames", "8", "--no-recording"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{run}: {stderr}");
+    let out = std::fs::read_dir(work)
+        .expect("the run output")
+        .map(|e| e.expect("entry").path())
+        .find(|p| p.join("summary.json").is_file())
+        .expect("an output folder with summary.json");
+    assert!(!object_meshes(&out).is_empty(), "objects mapped: {stderr}");
+    let summary = json(&out.join("summary.json"));
+    assert_eq!(summary["frames"], 8, "eight frames mapped: {summary}");
+    let metrics = json(&out.join("metrics.json"));
+    let scored = metrics["objects"].as_array().map_or(0, Vec::len);
+    assert!(scored > 0, "objects scored against the scene's gt_meshes: {metrics}");
+}
