@@ -23,6 +23,7 @@
 pub mod association;
 mod camera;
 pub mod lists;
+mod skips;
 
 use std::path::{Path, PathBuf};
 
@@ -41,7 +42,9 @@ use crate::ids::{ClassId, FrameIndex};
 use crate::sensor::frame::{CameraIntrinsics, InstanceMask, RgbdFrame};
 use association::{MAX_TIME_DIFFERENCE_S, Unmatched, associate};
 use camera::resolve_camera;
-use lists::{TimedFile, read_file_list, read_groundtruth};
+use lists::{TimedFile, TimedPose, read_file_list, read_groundtruth};
+pub use skips::SkippedImages;
+use skips::{Missing, warn_skips};
 
 /// TUM RGB-D's depth images: 5000 units per metre (0.2 mm).
 pub const TUM_DEPTH_SCALE: f32 = 5000.0;
@@ -79,17 +82,6 @@ struct TumFrame {
     rgb: TimedFile,
     depth: TimedFile,
     world_from_camera: Isometry3<f32>,
-}
-
-/// How many colour images [`TumSequence::open`] skipped, by reason.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct SkippedImages {
-    /// No depth image within the time tolerance.
-    pub no_depth: usize,
-    /// No ground-truth pose within the time tolerance.
-    pub no_pose: usize,
-    /// No `instance/<stem>.png` or no `class/<stem>.png`.
-    pub no_mask: usize,
 }
 
 /// A TUM RGB-D sequence folder opened for random access.
@@ -161,42 +153,8 @@ impl TumSequence {
                 "lists no images, so no frames",
             ));
         }
-        let times = |files: &[TimedFile]| files.iter().map(|f| f.timestamp_s).collect::<Vec<_>>();
-        let pose_times: Vec<f64> = poses.iter().map(|p| p.timestamp_s).collect();
-        let matches = associate(&times(&rgb), &times(&depth), &pose_times, options.max_time_difference_s);
-        let mut frames = Vec::new();
-        let mut skipped = SkippedImages::default();
-        for ((ordinal, image), matched) in (0u64..).zip(&rgb).zip(matches) {
-            let matched = match matched {
-                Ok(matched) => matched,
-                Err(reason) => {
-                    warn_first_skip(&skipped, reason, image);
-                    match reason {
-                        Unmatched::NoDepth => skipped.no_depth += 1,
-                        Unmatched::NoPose => skipped.no_pose += 1,
-                    }
-                    continue;
-                }
-            };
-            let depth_image = &depth[matched.depth];
-            require_listed_file(&dir, "rgb.txt", image)?;
-            require_listed_file(&dir, "depth.txt", depth_image)?;
-            if !mask_paths(&image.path).iter().all(|p| dir.join(p).exists()) {
-                if skipped.no_mask == 0 {
-                    let [instance, class] = mask_paths(&image.path);
-                    tracing::warn!(first = %image.path, "skipping colour images without both masks ({instance}, {class})");
-                }
-                skipped.no_mask += 1;
-                continue;
-            }
-            frames.push(TumFrame {
-                ordinal,
-                timestamp_s: image.timestamp_s,
-                rgb: image.clone(),
-                depth: depth_image.clone(),
-                world_from_camera: poses[matched.pose].world_from_camera,
-            });
-        }
+        let (frames, skips) = assemble_frames(&dir, &rgb, &depth, &poses, options.max_time_difference_s)?;
+        let skipped = SkippedImages::of(&skips);
         if frames.is_empty() {
             let reason = format!(
                 "no colour image makes a frame: of its {} images, {} have no depth image within {} s \
@@ -211,6 +169,7 @@ impl TumSequence {
             );
             return Err(CatmapError::layout(dir.join("rgb.txt"), reason));
         }
+        warn_skips(&skips, options.max_time_difference_s);
         tracing::debug!(dir = %dir.display(), frames = frames.len(), ?skipped, ?intrinsics, depth_scale, "opened TUM RGB-D sequence");
         Ok(Self {
             class_names: ClassNames::find_replica(&dir),
@@ -249,17 +208,48 @@ impl TumSequence {
     }
 }
 
-/// Logs the first colour image skipped for `reason` (later ones are only counted).
-fn warn_first_skip(skipped: &SkippedImages, reason: Unmatched, image: &TimedFile) {
-    match reason {
-        Unmatched::NoDepth if skipped.no_depth == 0 => {
-            tracing::warn!(first = %image.path, line = image.line, "skipping colour images of rgb.txt without a depth image near in time in depth.txt");
+/// The frames of the colour images `rgb` (with their depth images and poses nearest in time, and
+/// both masks), and the images skipped; fails when a listed image of a frame is missing.
+fn assemble_frames<'a>(
+    dir: &Path,
+    rgb: &'a [TimedFile],
+    depth: &[TimedFile],
+    poses: &[TimedPose],
+    max_difference_s: f64,
+) -> Result<(Vec<TumFrame>, Vec<(Missing, &'a TimedFile)>)> {
+    let times = |files: &[TimedFile]| files.iter().map(|f| f.timestamp_s).collect::<Vec<_>>();
+    let pose_times: Vec<f64> = poses.iter().map(|p| p.timestamp_s).collect();
+    let matches = associate(&times(rgb), &times(depth), &pose_times, max_difference_s);
+    let mut frames = Vec::new();
+    let mut skips: Vec<(Missing, &TimedFile)> = Vec::new();
+    for ((ordinal, image), matched) in (0u64..).zip(rgb).zip(matches) {
+        let matched = match matched {
+            Ok(matched) => matched,
+            Err(Unmatched::NoDepth) => {
+                skips.push((Missing::Depth, image));
+                continue;
+            }
+            Err(Unmatched::NoPose) => {
+                skips.push((Missing::Pose, image));
+                continue;
+            }
+        };
+        let depth_image = &depth[matched.depth];
+        require_listed_file(dir, "rgb.txt", image)?;
+        require_listed_file(dir, "depth.txt", depth_image)?;
+        if !mask_paths(&image.path).iter().all(|p| dir.join(p).exists()) {
+            skips.push((Missing::Mask, image));
+            continue;
         }
-        Unmatched::NoPose if skipped.no_pose == 0 => {
-            tracing::warn!(first = %image.path, line = image.line, "skipping colour images of rgb.txt without a pose near in time in groundtruth.txt");
-        }
-        _ => {}
+        frames.push(TumFrame {
+            ordinal,
+            timestamp_s: image.timestamp_s,
+            rgb: image.clone(),
+            depth: depth_image.clone(),
+            world_from_camera: poses[matched.pose].world_from_camera,
+        });
     }
+    Ok((frames, skips))
 }
 
 /// Fails unless the image `file` that `list` names is a file in `dir`.
