@@ -6,7 +6,7 @@
 //! share of its pixels that show its main ground-truth object; `catmap::metrics::association_purity`),
 //! ground-truth objects no object covers, and the association's milliseconds per frame.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -14,7 +14,8 @@ use catmap::dataset::FrameSource;
 use catmap::metrics::association_purity::AssociationTally;
 use catmap::objects::config::ObjectConfig;
 use catmap::objects::frame_observation::observe_objects;
-use catmap::objects::instance_association::{InstanceTracker, associate_frame};
+use catmap::objects::instance_association::InstanceTracker;
+use catmap::objects::segment::associate_frame;
 use catmap::synth::{InstanceIds, Preset, SensorModel, SensorSettings, SyntheticScene};
 
 #[expect(clippy::print_stdout, reason = "a benchmark prints its figures")]
@@ -54,12 +55,18 @@ fn main() -> Result<()> {
         let mut tracker = InstanceTracker::default();
         let mut tally = AssociationTally::default();
         let mut seconds = 0.0;
+        let mut first_frame: BTreeMap<u32, (usize, usize)> = BTreeMap::new();
         for i in 0..noisy.len() {
             let frame = noisy.read_frame(i)?;
             let start = Instant::now();
             let (relabelled, _) = associate_frame(&mut tracker, &frame, &observe_objects(&frame, &cfg), &cfg);
             seconds += start.elapsed().as_secs_f64();
             tally.add(&relabelled.instances, &exact.read_frame(i)?.instances);
+            for p in 0..relabelled.instances.len() {
+                if let Some(id) = relabelled.instances.object_at(p) {
+                    first_frame.entry(id.0).or_insert((i, 0)).1 += 1;
+                }
+            }
         }
         let objects = tally.objects();
         let covered: BTreeSet<_> = objects.iter().map(|o| o.truth).collect();
@@ -85,8 +92,9 @@ fn main() -> Result<()> {
         );
         for o in &objects {
             let design = exact.object(o.truth).map_or("?", |t| t.design.name());
+            let (first, _) = first_frame.get(&o.id.0).copied().unwrap_or_default();
             println!(
-                "  object {:2} → truth {:2} {design:18} purity {:5.1} %  {} px",
+                "  object {:2} → truth {:2} {design:18} purity {:5.1} %  {} px, from frame {first}",
                 o.id,
                 o.truth,
                 100.0 * o.purity,

@@ -178,6 +178,9 @@ fn sample_rays(
             0.0
         };
         let state = view.states[i];
+        if state == PixelState::Unsure {
+            continue;
+        }
         let (camera, dir) = pixel_ray(view, u, row);
         let (camera, dir) = match reflect {
             Some(plane) => (plane.reflect(&camera), plane.reflect_vector(&dir)),
@@ -287,7 +290,11 @@ fn depths_along_ray(
             z[start..].sort_by(f32::total_cmp);
         }
         // Views hold no prior rays; were one there, it would only teach free space.
-        PixelState::OtherObject | PixelState::HiddenSolid | PixelState::BelowSupport | PixelState::SeenFree => {
+        PixelState::OtherObject
+        | PixelState::Unsure
+        | PixelState::HiddenSolid
+        | PixelState::BelowSupport
+        | PixelState::SeenFree => {
             stratified(
                 (depth - band).max(0.0),
                 depth + cfg.behind_occluder_m,

@@ -164,6 +164,7 @@ pub(crate) fn view_evidence(view: &ObjectView, p_world: &Point3<f32>, margin_m: 
             PixelState::OtherObject if p_camera.z <= d + OCCLUDER_DEPTH_M => ViewEvidence::BehindOther,
             PixelState::OtherObject
             | PixelState::Unknown
+            | PixelState::Unsure
             | PixelState::HiddenSolid
             | PixelState::BelowSupport
             | PixelState::SeenFree => ViewEvidence::Nothing,

@@ -37,6 +37,12 @@ pub struct ObjectConfig {
     pub bleed_radius_px: u32,
     /// See `bleed_radius_px`, metres.
     pub bleed_depth_m: f32,
+    /// Pixels within this many pixels of a border between a mask and anything else are unsure:
+    /// no field learns from them ([`crate::objects::mask_trim::mark_unsure_borders`]). A
+    /// segmenter's masks are often a pixel or two too large or too small, and a pixel on the
+    /// wrong side teaches a field surface metres behind the object or carves its rim. 0 (the
+    /// default): every pixel counts.
+    pub mask_border_px: u32,
     /// Where object ids come from: the dataset's (consistent) ids, or per-frame masks associated
     /// into objects ([`crate::objects::instance_association`]).
     pub association: AssociationConfig,
@@ -67,6 +73,7 @@ impl Default for ObjectConfig {
             box_fit: None,
             bleed_radius_px: 0,
             bleed_depth_m: 0.1,
+            mask_border_px: 0,
             association: AssociationConfig::default(),
         }
     }

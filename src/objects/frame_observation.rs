@@ -60,7 +60,7 @@ pub fn observe_objects(frame: &RgbdFrame, cfg: &ObjectConfig) -> FrameObservatio
                 found[last_slot].1.add(i as u32, u, v, frame.classes[i]);
             }
             InstanceLabel::Background if u % stride == 0 && v % stride == 0 => background_pixels.push(i as u32),
-            InstanceLabel::Background | InstanceLabel::Unknown => {}
+            InstanceLabel::Background | InstanceLabel::Unknown | InstanceLabel::Unsure => {}
         }
     }
     let mut objects: BTreeMap<ObjectId, ObjectObservation> = found

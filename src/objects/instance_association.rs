@@ -18,7 +18,7 @@
 //!   forgotten, so a spurious mask never makes an object;
 //! - a mask with fewer than `min_points` valid depth points is held back.
 //!
-//! Held-back masks' pixels become [`InstanceLabel::Unknown`] ([`relabel_instances`]). Decisions
+//! Held-back masks' pixels become unsure ([`crate::objects::segment::relabel_instances`]). Decisions
 //! depend only on the masks and the state, never on the masks' own ids or their order.
 
 use std::collections::{BTreeMap, BTreeSet, HashSet};
@@ -28,10 +28,7 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use crate::ids::{ClassId, FrameIndex, ObjectId};
-use crate::objects::config::ObjectConfig;
-use crate::objects::frame_observation::{FrameObservation, observe_objects};
 use crate::objects::observed_cloud::VoxelKeyHasher;
-use crate::sensor::frame::{InstanceLabel, InstanceMask, RgbdFrame};
 
 /// Where object ids come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -144,6 +141,11 @@ fn key(x: i64, y: i64, z: i64) -> u64 {
     (c(x) << 42) | (c(y) << 21) | c(z)
 }
 
+/// Whether voxel `[x, y, z]` or one of the 26 around it is in `voxels`.
+fn near(voxels: &VoxelSet, [x, y, z]: [i64; 3]) -> bool {
+    (-1..=1).any(|dx| (-1..=1).any(|dy| (-1..=1).any(|dz| voxels.contains(&key(x + dx, y + dy, z + dz)))))
+}
+
 fn cell(p: &Point3<f32>, voxel_m: f32) -> [i64; 3] {
     [p.x, p.y, p.z].map(|v| (v / voxel_m).floor() as i64)
 }
@@ -167,10 +169,7 @@ impl Footprint {
 
     /// Share of `points` in or next to a voxel of the footprint.
     fn overlap(&self, points: &[Point3<f32>], voxel_m: f32) -> f32 {
-        let near = |[x, y, z]: [i64; 3]| {
-            (-1..=1).any(|dx| (-1..=1).any(|dy| (-1..=1).any(|dz| self.voxels.contains(&key(x + dx, y + dy, z + dz)))))
-        };
-        let hits = points.iter().filter(|p| near(cell(p, voxel_m))).count();
+        let hits = points.iter().filter(|p| near(&self.voxels, cell(p, voxel_m))).count();
         hits as f32 / points.len().max(1) as f32
     }
 }
@@ -291,80 +290,6 @@ impl InstanceTracker {
             !promoted.contains_key(&(slot - 1))
         });
         fates
-    }
-}
-
-/// The masks of `frame` as the association sees them: every mask of `observation`, its majority
-/// class and at most `max_points_per_mask` of its pixels' points, evenly spaced.
-pub fn mask_evidence(frame: &RgbdFrame, observation: &FrameObservation, cfg: &AssociationConfig) -> Vec<MaskEvidence> {
-    observation
-        .objects
-        .iter()
-        .filter_map(|(&local, o)| {
-            let class = o.majority_class()?;
-            let valid: Vec<Point3<f32>> = o
-                .pixels
-                .iter()
-                .filter_map(|&i| frame.point_in_world(i as usize))
-                .collect();
-            let step = valid.len().div_ceil(cfg.max_points_per_mask.max(1)).max(1);
-            let points = valid.into_iter().step_by(step).collect();
-            Some(MaskEvidence { local, class, points })
-        })
-        .collect()
-}
-
-/// One frame of per-frame masks made into objects: its masks' evidence is associated by
-/// `tracker`, the frame relabelled, and its observation made again from the relabelled mask.
-pub fn associate_frame(
-    tracker: &mut InstanceTracker,
-    frame: &RgbdFrame,
-    observation: &FrameObservation,
-    cfg: &ObjectConfig,
-) -> (RgbdFrame, FrameObservation) {
-    let fates = tracker.associate(
-        frame.index,
-        &mask_evidence(frame, observation, &cfg.association),
-        &cfg.association,
-    );
-    let relabelled = relabel_instances(frame, &fates);
-    let observation = observe_objects(&relabelled, cfg);
-    (relabelled, observation)
-}
-
-/// The segment stage's work on one frame: bleeding mask pixels trimmed (`bleed_radius_px`),
-/// the pixels grouped by object, and, with per-frame ids, the masks associated into objects by
-/// `tracker`. Returns the frame when it changed, and its observation.
-pub fn segment_frame(
-    frame: &RgbdFrame,
-    cfg: &ObjectConfig,
-    tracker: &mut InstanceTracker,
-) -> (Option<RgbdFrame>, FrameObservation) {
-    let trimmed = crate::objects::mask_trim::trim_bleeding_masks(frame, cfg);
-    let frame_now = trimmed.as_ref().unwrap_or(frame);
-    let observation = observe_objects(frame_now, cfg);
-    match cfg.association.instances {
-        InstanceSource::Consistent => (trimmed, observation),
-        InstanceSource::PerFrame => {
-            let (relabelled, observation) = associate_frame(tracker, frame_now, &observation, cfg);
-            (Some(relabelled), observation)
-        }
-    }
-}
-
-/// `frame` with its masks renamed as `fates` says: a mask that shows an object gets its id; a
-/// held-back mask, and any mask `fates` does not name, becomes unknown.
-pub fn relabel_instances(frame: &RgbdFrame, fates: &BTreeMap<ObjectId, MaskFate>) -> RgbdFrame {
-    let labels = (0..frame.instances.len()).map(|i| match frame.instances.label(i) {
-        InstanceLabel::Object(local) => match fates.get(&local) {
-            Some(MaskFate::Object(id)) => InstanceLabel::Object(*id),
-            Some(MaskFate::Held(_)) | None => InstanceLabel::Unknown,
-        },
-        other => other,
-    });
-    RgbdFrame {
-        instances: InstanceMask::from_labels(labels),
-        ..frame.clone()
     }
 }
 

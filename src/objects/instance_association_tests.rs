@@ -1,6 +1,10 @@
 use nalgebra::{Isometry3, Point3};
 
 use super::*;
+use crate::objects::config::ObjectConfig;
+use crate::objects::frame_observation::observe_objects;
+use crate::objects::segment::{associate_frame, relabel_instances};
+use crate::sensor::frame::{InstanceLabel, InstanceMask, RgbdFrame};
 use crate::sensor::frame::CameraIntrinsics;
 
 const CHAIR: ClassId = ClassId(20);
@@ -205,8 +209,8 @@ fn a_mask_without_depth_is_held_and_relabelling_names_objects_and_unknowns() {
         [
             InstanceLabel::Background,
             InstanceLabel::Object(ObjectId(1)),
-            InstanceLabel::Unknown,
-            InstanceLabel::Unknown
+            InstanceLabel::Unsure,
+            InstanceLabel::Unsure
         ]
     );
 }

@@ -2,12 +2,16 @@
 //! lies behind the object (a wall, the floor a few metres back). Back-projected, those pixels put
 //! wall points into the object's cloud, and its box grows by metres.
 //!
-//! [`trim_bleeding_masks`] labels such pixels [`InstanceLabel::Unknown`]: an object pixel whose
+//! [`trim_bleeding_masks`] labels such pixels [`InstanceLabel::Unsure`]: an object pixel whose
 //! depth lies more than `bleed_depth_m` beyond the nearest pixel of the same object within
 //! `bleed_radius_px` (a square window). A pixel on the object itself has a neighbour of its
 //! object at about its own depth; a pixel past the object's silhouette has the silhouette much
 //! nearer. Where an object hides part of itself (a chair's back leg beside its front leg), the
 //! hidden part's edge pixels are trimmed too; with exact masks nothing else changes.
+//!
+//! [`mark_unsure_borders`] does not look at depth: every pixel within a few pixels of a mask's
+//! border becomes unsure, on both sides, since a segmenter's border may be off either way (a mask
+//! too large teaches a field the wall behind; one too small carves the object's rim).
 
 use crate::objects::config::ObjectConfig;
 use crate::sensor::frame::{InstanceLabel, RgbdFrame};
@@ -49,7 +53,57 @@ pub fn trim_bleeding_masks(frame: &RgbdFrame, cfg: &ObjectConfig) -> Option<Rgbd
     }
     let mut out = frame.clone();
     for i in trimmed {
-        out.instances.set(i, InstanceLabel::Unknown);
+        out.instances.set(i, InstanceLabel::Unsure);
+    }
+    Some(out)
+}
+
+/// `frame` with every pixel within `radius_px` pixels (a square window) of a border between two
+/// labels, one of them an object's, [`InstanceLabel::Unsure`]; `None` when `radius_px` is 0 or
+/// the frame has no such border. A border pixel is one whose right or lower neighbour has another
+/// label, and that neighbour; the band grows from them by `radius_px − 1` pixels, so a mask that
+/// is `radius_px` pixels too large or too small has all its wrong pixels unsure.
+pub fn mark_unsure_borders(frame: &RgbdFrame, radius_px: u32) -> Option<RgbdFrame> {
+    if radius_px == 0 {
+        return None;
+    }
+    let (w, h) = (frame.intrinsics.width as usize, frame.intrinsics.height as usize);
+    let labels = &frame.instances;
+    let differ = |a: usize, b: usize| {
+        let (la, lb) = (labels.label(a), labels.label(b));
+        la != lb && (matches!(la, InstanceLabel::Object(_)) || matches!(lb, InstanceLabel::Object(_)))
+    };
+    let mut border = vec![false; w * h];
+    for v in 0..h {
+        for u in 0..w {
+            let i = v * w + u;
+            for j in [(u + 1 < w).then_some(i + 1), (v + 1 < h).then_some(i + w)].into_iter().flatten() {
+                if differ(i, j) {
+                    border[i] = true;
+                    border[j] = true;
+                }
+            }
+        }
+    }
+    if !border.contains(&true) {
+        return None;
+    }
+    let grow = radius_px as usize - 1;
+    let mut rows = vec![false; w * h];
+    for v in 0..h {
+        let row = &border[v * w..(v + 1) * w];
+        for u in 0..w {
+            rows[v * w + u] = row[u.saturating_sub(grow)..(u + grow + 1).min(w)].contains(&true);
+        }
+    }
+    let mut out = frame.clone();
+    for u in 0..w {
+        for v in 0..h {
+            let near = (v.saturating_sub(grow)..(v + grow + 1).min(h)).any(|y| rows[y * w + u]);
+            if near {
+                out.instances.set(v * w + u, InstanceLabel::Unsure);
+            }
+        }
     }
     Some(out)
 }
@@ -99,7 +153,7 @@ mod tests {
     }
 
     #[test]
-    fn the_wall_pixels_a_mask_bled_onto_become_unknown_and_the_object_stays() {
+    fn the_wall_pixels_a_mask_bled_onto_become_unsure_and_the_object_stays() {
         let cfg = ObjectConfig {
             bleed_radius_px: 2,
             ..ObjectConfig::default()
@@ -107,7 +161,7 @@ mod tests {
         let trimmed = trim_bleeding_masks(&frame(3, 14), &cfg).expect("the mask bleeds two columns each side");
         let row = labels_of_row(&trimmed);
         for u in [3, 4, 12, 13] {
-            assert_eq!(row[u], InstanceLabel::Unknown, "column {u} shows the wall");
+            assert_eq!(row[u], InstanceLabel::Unsure, "column {u} shows the wall");
         }
         for (u, label) in row.iter().enumerate().take(12).skip(5) {
             assert_eq!(
@@ -128,5 +182,28 @@ mod tests {
         assert!(trim_bleeding_masks(&frame(5, 12), &cfg).is_none());
         let off = ObjectConfig::default();
         assert!(trim_bleeding_masks(&frame(3, 14), &off).is_none());
+    }
+
+    #[test]
+    fn a_border_band_of_radius_r_covers_r_pixels_on_each_side_of_a_masks_border() {
+        let unsure = |row: &[InstanceLabel]| -> Vec<usize> {
+            (0..row.len()).filter(|&u| row[u] == InstanceLabel::Unsure).collect()
+        };
+        let one = mark_unsure_borders(&frame(5, 12), 1).expect("the mask has borders");
+        assert_eq!(unsure(&labels_of_row(&one)), vec![4, 5, 11, 12]);
+        let two = mark_unsure_borders(&frame(5, 12), 2).expect("the mask has borders");
+        let row = labels_of_row(&two);
+        assert_eq!(unsure(&row), vec![3, 4, 5, 6, 10, 11, 12, 13]);
+        assert!((7..10).all(|u| row[u] == InstanceLabel::Object(ObjectId(4))), "{row:?}");
+        assert_eq!(row[2], InstanceLabel::Background);
+        // A mask two pixels too large on each side has every wrong pixel unsure.
+        let grown = labels_of_row(&mark_unsure_borders(&frame(3, 14), 2).expect("borders"));
+        assert!([3, 4, 12, 13].iter().all(|&u| grown[u] == InstanceLabel::Unsure), "{grown:?}");
+    }
+
+    #[test]
+    fn no_border_band_without_a_radius_or_without_a_mask() {
+        assert!(mark_unsure_borders(&frame(5, 12), 0).is_none());
+        assert!(mark_unsure_borders(&frame(0, 0), 2).is_none(), "no object pixel, no border");
     }
 }

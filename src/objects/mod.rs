@@ -12,5 +12,6 @@ pub mod object_bounds;
 pub mod object_view;
 pub mod observed_cloud;
 pub mod observed_space;
+pub mod segment;
 #[cfg(test)]
 pub(crate) mod view_fixtures;

@@ -18,6 +18,9 @@ pub enum PixelState {
     ThisObject,
     /// The segmentation does not know (ScanNet's unlabelled pixels).
     Unknown,
+    /// The segmentation's label is not trusted ([`InstanceLabel::Unsure`]): the pixel teaches
+    /// nothing.
+    Unsure,
     /// Not a pixel: a prior ray whose samples lie in cells of the object's box that no view saw
     /// into ([`super::hidden_space`]); each sample is asked to be solid.
     HiddenSolid,
@@ -42,7 +45,7 @@ impl PixelState {
         match self {
             Self::ThisObject => Some(1.0),
             Self::OtherObject => Some(0.0),
-            Self::Unknown | Self::HiddenSolid | Self::BelowSupport | Self::SeenFree => None,
+            Self::Unknown | Self::Unsure | Self::HiddenSolid | Self::BelowSupport | Self::SeenFree => None,
         }
     }
 
@@ -52,7 +55,7 @@ impl PixelState {
         match self {
             Self::HiddenSolid => Some(1.0),
             Self::BelowSupport | Self::SeenFree => Some(0.0),
-            Self::ThisObject | Self::OtherObject | Self::Unknown => None,
+            Self::ThisObject | Self::OtherObject | Self::Unknown | Self::Unsure => None,
         }
     }
 }
@@ -71,6 +74,7 @@ impl ViewOwner {
     pub fn state_of(self, label: InstanceLabel) -> PixelState {
         match (self, label) {
             (_, InstanceLabel::Unknown) => PixelState::Unknown,
+            (_, InstanceLabel::Unsure) => PixelState::Unsure,
             (Self::Object(me), InstanceLabel::Object(id)) if me == id => PixelState::ThisObject,
             (Self::Background, InstanceLabel::Background) => PixelState::ThisObject,
             _ => PixelState::OtherObject,

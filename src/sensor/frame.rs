@@ -86,6 +86,9 @@ pub enum InstanceLabel {
     Object(ObjectId),
     /// The segmentation does not know (ScanNet's unlabelled pixels).
     Unknown,
+    /// The segmentation's label is not trusted here (a mask's uncertain border, a mask the
+    /// association held back): no field learns from the pixel.
+    Unsure,
 }
 
 /// Per-pixel instance labels of one frame.
@@ -99,6 +102,7 @@ pub struct InstanceMask {
 impl InstanceMask {
     const BACKGROUND: u32 = 0;
     const UNKNOWN: u32 = u32::MAX;
+    const UNSURE: u32 = u32::MAX - 1;
 
     /// An all-background mask of `pixel_count` pixels.
     pub fn background(pixel_count: usize) -> Self {
@@ -118,9 +122,10 @@ impl InstanceMask {
         match label {
             InstanceLabel::Background => Self::BACKGROUND,
             InstanceLabel::Unknown => Self::UNKNOWN,
+            InstanceLabel::Unsure => Self::UNSURE,
             InstanceLabel::Object(ObjectId(id)) => {
                 debug_assert!(
-                    id != Self::BACKGROUND && id != Self::UNKNOWN,
+                    id != Self::BACKGROUND && id != Self::UNKNOWN && id != Self::UNSURE,
                     "object id {id} is reserved"
                 );
                 id
@@ -134,6 +139,7 @@ impl InstanceMask {
         match self.codes[i] {
             Self::BACKGROUND => InstanceLabel::Background,
             Self::UNKNOWN => InstanceLabel::Unknown,
+            Self::UNSURE => InstanceLabel::Unsure,
             id => InstanceLabel::Object(ObjectId(id)),
         }
     }

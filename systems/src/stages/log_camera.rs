@@ -68,7 +68,7 @@ fn log_images(rec: &rerun::RecordingStream, frame: &RgbdFrame, downscale: u32, j
     let labels: Vec<u16> = (0..frame.instances.len())
         .map(|i| match frame.instances.label(i) {
             InstanceLabel::Object(ObjectId(id)) => u16::try_from(id).unwrap_or(u16::MAX),
-            InstanceLabel::Background | InstanceLabel::Unknown => 0,
+            InstanceLabel::Background | InstanceLabel::Unknown | InstanceLabel::Unsure => 0,
         })
         .collect();
     let (labels, _, _) = downscale_nearest(&labels, k.width, k.height, downscale);

@@ -1,7 +1,8 @@
 //! Segment stage: each new frame's instance mask is split into per-object observations.
 
 use bevy_ecs::prelude::*;
-use catmap::objects::instance_association::{InstanceSource, segment_frame};
+use catmap::objects::instance_association::InstanceSource;
+use catmap::objects::segment::segment_frame;
 
 use crate::components::{CameraFrame, FrameObservations};
 use crate::resources::{Association, Settings, SmallInstances, StageTimes};
