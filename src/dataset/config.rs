@@ -25,8 +25,8 @@ pub struct StreamConfig {
 pub struct LiveConfig {
     /// Replay at the sensor's rate instead of waiting for the mapper (`--live`).
     pub enabled: bool,
-    /// Frames per second of the replay (`--fps`); unset: 30 (none of the readers has
-    /// timestamps).
+    /// Frames per second of the replay (`--fps`); unset: 30 (the replay does not use the TUM
+    /// reader's timestamps).
     pub fps: Option<f64>,
     /// Seconds of training after the last frame, before the final meshes.
     pub finish_seconds: f64,

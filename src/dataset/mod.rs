@@ -1,5 +1,6 @@
-//! Datasets as random-access frame sources: the Replica (vMAP layout) and ScanNet readers, and the
-//! built-in synthetic scenes, all behind [`FrameSource`].
+//! Datasets as random-access frame sources: the Replica (vMAP layout), ScanNet and TUM RGB-D
+//! (with per-frame mask folders) readers, and the built-in synthetic scenes, all behind
+//! [`FrameSource`].
 
 pub mod camera_spec;
 pub mod class_names;

@@ -13,7 +13,7 @@ pub struct ScheduleConfig {
     /// frame, or whose loss still falls), category members' own fields rest once their category
     /// field makes their mesh, and one phase after the stream trains until every field has
     /// converged or `max_steps_after_stream`. `paper` (to reproduce the paper's protocol; ~3.7×
-    /// the time, better completion of objects seen only from one side — see the README): every
+    /// the time, better completion of objects seen only from one side — see docs/BENCHMARKS.md): every
     /// field on every step, `fields.final_steps` refinement steps, then
     /// `category_fields.iterations` category steps. Offline runs always follow `paper`.
     pub policy: SchedulePolicy,

@@ -32,7 +32,7 @@ pub(crate) const VERSION: &str = env!("CATMAP_VERSION");
 enum Command {
     /// Map a dataset (default: synthesise the default scene into OUT/scene and map it).
     Run(cli::run::RunArgs),
-    /// Write a synthetic scene in the Replica (vMAP) layout, with ground-truth meshes.
+    /// Write a synthetic scene in the Replica (vMAP) or TUM RGB-D layout, with ground-truth meshes.
     Synth(cli::synth::SynthArgs),
     /// Score predicted object meshes against ground-truth meshes (accuracy, completion, C.R.).
     Eval(cli::eval::EvalArgs),

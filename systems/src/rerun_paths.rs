@@ -1,18 +1,6 @@
 //! Every Rerun entity path and timeline the mapper logs to, in one place (a viewer blueprint
-//! and the tests name entities through these).
-//!
-//! ```text
-//! world                          view coordinates (right-handed, z up)
-//! world/camera                   camera pose
-//! world/camera/image             pinhole; rgb, depth, instances below it
-//! world/background/mesh
-//! world/objects/{id}/{points,box,aligned_box,reliability,mesh}
-//! training/{quantity}/{field}    time series, one view per quantity: loss, steps, carving_share,
-//!                                shape_code_norm, texture_code_norm; field = background,
-//!                                objects/{id} or categories/{n} (the category field created
-//!                                n-th: its number holds while it continues under a new
-//!                                membership)
-//! ```
+//! and the tests name entities through these). The entity tree, with what is logged where and
+//! when, is docs/RERUN.md (a test below keeps it to these paths).
 
 use catmap::ObjectId;
 

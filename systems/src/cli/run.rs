@@ -22,7 +22,7 @@ pub struct RunArgs {
     /// Layout of the dataset folder.
     #[arg(long, value_enum, default_value_t = DatasetFormat::Replica)]
     pub format: DatasetFormat,
-    /// Camera as W,H,FX,FY,CX,CY (Replica layout; default: intrinsics.json, else Replica's camera).
+    /// Camera as W,H,FX,FY,CX,CY (Replica and TUM layouts; default: intrinsics.json, else Replica's camera).
     #[arg(long)]
     pub camera: Option<String>,
     /// Config file (TOML; lists only what it changes, see `catmap config`).

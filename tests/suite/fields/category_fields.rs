@@ -2,7 +2,7 @@
 //! with the same number of per-object steps, the chairs' shared category field completes them
 //! better (lower completion distance; measured 3.12 → 2.88 cm with these short runs, 600
 //! per-object steps against 300 + 300 — the
-//! default scene's figures are in the README), and objects outside category fields are unchanged.
+//! default scene's figures are in docs/RESULTS.md), and objects outside category fields are unchanged.
 
 use std::collections::BTreeMap;
 
