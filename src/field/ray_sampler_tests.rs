@@ -367,3 +367,27 @@ fn own_pixel_draws_put_rays_on_a_thin_object_that_the_box_draws_rarely_hit() {
     assert!(window_share(true) > 0.45, "alone in its class: {}", window_share(true));
     assert!(window_share(false) < 0.12, "a member: {}", window_share(false));
 }
+
+#[test]
+fn unsure_pixels_give_no_ray() {
+    let mut unsure = view(0, 1.5);
+    for (i, s) in unsure.states.iter_mut().enumerate() {
+        if i % 4 == 3 {
+            *s = PixelState::Unsure;
+        }
+    }
+    let cfg = RaySamplerConfig::OBJECT;
+    let rays = draw_unboxed(&[&unsure], &[0], &cfg, 3);
+    let drawn = cfg.keyframes_per_step * cfg.pixels_per_keyframe;
+    assert!(!rays.states.contains(&PixelState::Unsure));
+    assert!(
+        rays.num_rays() < drawn && rays.num_rays() > drawn / 2,
+        "a quarter of the pixels are unsure: {} rays of {drawn} draws",
+        rays.num_rays()
+    );
+    let all_unsure = ObjectView {
+        states: vec![PixelState::Unsure; 8],
+        ..view(0, 1.5)
+    };
+    assert_eq!(draw_unboxed(&[&all_unsure], &[0], &cfg, 3).num_rays(), 0);
+}
