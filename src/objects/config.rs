@@ -37,6 +37,9 @@ pub struct ObjectConfig {
     pub bleed_radius_px: u32,
     /// See `bleed_radius_px`, metres.
     pub bleed_depth_m: f32,
+    /// Added to `bleed_depth_m` per metre of the pixel's depth: a surface seen at a grazing angle
+    /// falls away by more than a few centimetres within a few pixels far off.
+    pub bleed_depth_per_m: f32,
     /// Pixels within this many pixels of a border between a mask and anything else are unsure:
     /// no field learns from them ([`crate::objects::mask_trim::mark_unsure_borders`]). A
     /// segmenter's masks are often a pixel or two too large or too small, and a pixel on the
@@ -73,6 +76,7 @@ impl Default for ObjectConfig {
             box_fit: None,
             bleed_radius_px: 0,
             bleed_depth_m: 0.1,
+            bleed_depth_per_m: 0.0,
             mask_border_px: 0,
             association: AssociationConfig::default(),
         }

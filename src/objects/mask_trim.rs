@@ -4,7 +4,7 @@
 //!
 //! [`trim_bleeding_masks`] labels such pixels [`InstanceLabel::Unsure`]: an object pixel whose
 //! depth lies more than `bleed_depth_m` beyond the nearest pixel of the same object within
-//! `bleed_radius_px` (a square window). A pixel on the object itself has a neighbour of its
+//! `bleed_radius_px` (a square window), plus `bleed_depth_per_m` per metre of its depth. A pixel on the object itself has a neighbour of its
 //! object at about its own depth; a pixel past the object's silhouette has the silhouette much
 //! nearer. Where an object hides part of itself (a chair's back leg beside its front leg), the
 //! hidden part's edge pixels are trimmed too; with exact masks nothing else changes.
@@ -45,7 +45,7 @@ pub fn trim_bleeding_masks(frame: &RgbdFrame, cfg: &ObjectConfig) -> Option<Rgbd
                     }
                 }
             }
-            z - nearest > cfg.bleed_depth_m
+            z - nearest > cfg.bleed_depth_m + cfg.bleed_depth_per_m * z
         })
         .collect();
     if trimmed.is_empty() {
