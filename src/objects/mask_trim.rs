@@ -206,4 +206,31 @@ mod tests {
         assert!(mark_unsure_borders(&frame(5, 12), 0).is_none());
         assert!(mark_unsure_borders(&frame(0, 0), 2).is_none(), "no object pixel, no border");
     }
+
+    #[test]
+    fn a_surface_falling_away_at_a_grazing_angle_is_kept_with_a_depth_allowance() {
+        // The object's surface falls away by 6 cm per column at 3 m; the mask bleeds onto the wall.
+        let mut grazing = frame(3, 14);
+        for (i, z) in grazing.depth_m.iter_mut().enumerate() {
+            let u = i as u32 % 20;
+            if (5..12).contains(&u) {
+                *z = 3.0 + 0.06 * (u - 5) as f32;
+            } else {
+                *z = 5.0;
+            }
+        }
+        let strict = ObjectConfig {
+            bleed_radius_px: 2,
+            ..ObjectConfig::default()
+        };
+        let row = labels_of_row(&trim_bleeding_masks(&grazing, &strict).expect("trims"));
+        assert_eq!(row[9], InstanceLabel::Unsure, "0.12 m beyond column 7 at 3 m: trimmed without allowance");
+        let allowing = ObjectConfig {
+            bleed_depth_per_m: 0.1,
+            ..strict
+        };
+        let row = labels_of_row(&trim_bleeding_masks(&grazing, &allowing).expect("the wall still bleeds"));
+        assert!((5..12).all(|u| row[u] == InstanceLabel::Object(ObjectId(4))), "{row:?}");
+        assert!([3, 4, 12, 13].iter().all(|&u| row[u] == InstanceLabel::Unsure), "{row:?}");
+    }
 }
