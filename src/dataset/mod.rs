@@ -59,6 +59,14 @@ impl<T: FrameSource + ?Sized> FrameSource for Box<T> {
     }
 }
 
+/// The error of a reader asked for frame `position` of a sequence of `len` frames in `dir`.
+pub fn position_out_of_range(dir: &std::path::Path, position: usize, len: usize) -> crate::error::CatmapError {
+    crate::error::CatmapError::layout(
+        dir,
+        format!("frame position {position} is out of range: the sequence has {len} frames"),
+    )
+}
+
 /// Converts a dataset position into the frame index stored on frames.
 pub fn frame_index(position: usize) -> FrameIndex {
     FrameIndex(position as u64)

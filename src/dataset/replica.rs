@@ -242,11 +242,7 @@ impl FrameSource for ReplicaSequence {
 
     fn read_frame(&self, position: usize) -> Result<RgbdFrame> {
         let Some(frame) = self.frames.get(position) else {
-            let reason = format!(
-                "frame position {position} is out of range: the sequence has {} frames",
-                self.len()
-            );
-            return Err(CatmapError::layout(&self.dir, reason));
+            return Err(crate::dataset::position_out_of_range(&self.dir, position, self.len()));
         };
         let rgb_path = self.frame_path("rgb", frame.index);
         let depth_path = self.frame_path("depth", frame.index);

@@ -78,6 +78,12 @@ pub fn write_replica_layout(scene: &SyntheticScene, dir: &Path, progress: impl F
         depth_scale: DEPTH_SCALE,
     };
     write_json(&dir.join("intrinsics.json"), &intrinsics)?;
+    write_ground_truth(scene, dir)
+}
+
+/// Writes `scene.json` (the objects) and `gt_meshes/obj_{id}.ply` into `dir`, as both layouts have
+/// them.
+pub(crate) fn write_ground_truth(scene: &SyntheticScene, dir: &Path) -> Result<()> {
     write_json(&dir.join("scene.json"), &SceneDescription::of(scene))?;
     for object in scene.objects() {
         object

@@ -22,9 +22,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use image::ExtendedColorType;
 use rayon::prelude::*;
 
-use super::description::SceneDescription;
 use super::render::RenderedFrame;
-use super::replica_writer::{write_json, write_png};
+use super::replica_writer::{write_ground_truth, write_json, write_png};
 use super::scene::SyntheticScene;
 use crate::atomic_file::write_atomic;
 use crate::dataset::FrameSource;
@@ -101,13 +100,7 @@ pub fn write_tum_layout(scene: &SyntheticScene, dir: &Path, progress: impl Fn(us
         "depth_scale": TUM_DEPTH_SCALE,
     });
     write_json(&dir.join("intrinsics.json"), &intrinsics)?;
-    write_json(&dir.join("scene.json"), &SceneDescription::of(scene))?;
-    for object in scene.objects() {
-        object
-            .surface_in_world
-            .write_ply(&dir.join("gt_meshes").join(format!("obj_{}.ply", object.id)))?;
-    }
-    Ok(())
+    write_ground_truth(scene, dir)
 }
 
 /// Writes the four images of frame `i`.
