@@ -1,7 +1,8 @@
 //! Checkpoints: a mapper saved, dropped and restored four times — after the first frame, mid-stream,
 //! during the training after the stream, during the category phase — ends with the same final
 //! meshes, categories and map as a run that was never interrupted (bit for bit), the solid and
-//! support priors on.
+//! support priors on; and a run with per-frame instance ids, whose association memory is part of
+//! the checkpoint, restored mid-stream.
 
 use std::ops::ControlFlow;
 use std::sync::Arc;
@@ -10,7 +11,8 @@ use catmap::config::FieldConfig;
 use catmap::dataset::FrameSource;
 use catmap::dataset::stream::StreamMessage;
 use catmap::meshing::MapMeshes;
-use catmap::synth::{Preset, SyntheticScene};
+use catmap::objects::instance_association::InstanceSource;
+use catmap::synth::{InstanceIds, Preset, SensorModel, SensorSettings, SyntheticScene};
 use catmap::training::SchedulePolicy;
 use catmap::{MapperConfig, RgbdFrame};
 use catmap_systems::{Mapper, RunOutcome, RunPhase, SavedMapper};
@@ -82,9 +84,9 @@ fn stop_in(phase: RunPhase) -> Option<Stop> {
 
 /// Maps every other frame of `scene` through a channel the test holds (like a reader thread's),
 /// stopping (save, drop, restore) at each of `stops`.
-fn run(scene: &SyntheticScene, stops: &[Stop]) -> (MapMeshes, String, String) {
+fn run(scene: &SyntheticScene, config: &MapperConfig, stops: &[Stop]) -> (MapMeshes, String, String) {
     let (mut sender, receiver) = bounded(4);
-    let mut mapper = Mapper::with_inbox(config(), receiver).expect("valid config");
+    let mut mapper = Mapper::with_inbox(config.clone(), receiver).expect("valid config");
     for (mapped, position) in (0..scene.len()).step_by(2).enumerate() {
         push(&mut mapper, &sender, scene.read_frame(position).expect("frame renders"));
         if stops.contains(&Stop::Frame(mapped + 1)) {
@@ -117,14 +119,14 @@ fn run(scene: &SyntheticScene, stops: &[Stop]) -> (MapMeshes, String, String) {
 #[test]
 fn a_restored_mapper_continues_to_the_same_map_as_an_uninterrupted_one() {
     let scene = SyntheticScene::generate(4, Preset::Small).expect("small scene");
-    let (meshes, categories, map) = run(&scene, &[]);
+    let (meshes, categories, map) = run(&scene, &config(), &[]);
     assert!(
         meshes.objects.len() >= 5,
         "meshes for the objects: {}",
         meshes.objects.len()
     );
     let stops = [Stop::Frame(1), Stop::Frame(8), Stop::AfterStream, Stop::Categories];
-    let (resumed, resumed_categories, resumed_map) = run(&scene, &stops);
+    let (resumed, resumed_categories, resumed_map) = run(&scene, &config(), &stops);
     assert_eq!(resumed_map, map, "map snapshot");
     assert_eq!(resumed_categories, categories, "categories");
     assert_eq!(
@@ -157,4 +159,33 @@ fn a_damaged_checkpoint_is_refused_with_the_file_named() {
     std::fs::write(&state, bytes).expect("damages");
     let err = SavedMapper::load(dir.path()).err().expect("refused").to_string();
     assert!(err.contains(&manifest.state.name) && err.contains("CRC-32"), "{err}");
+}
+
+#[test]
+fn a_run_with_per_frame_ids_restored_mid_stream_continues_to_the_same_map() {
+    let scene = SyntheticScene::generate(4, Preset::Small)
+        .expect("small scene")
+        .with_sensor(SensorSettings {
+            model: SensorModel::None,
+            ids: InstanceIds::PerFrame,
+        });
+    let mut config = config();
+    config.objects.association.instances = InstanceSource::PerFrame;
+    let (meshes, categories, map) = run(&scene, &config, &[]);
+    assert!(
+        meshes.objects.len() >= 5,
+        "the masks make objects: {}",
+        meshes.objects.len()
+    );
+    // Frame 2 holds only candidates (seen in 3 frames they become objects), frame 9 objects.
+    let (resumed, resumed_categories, resumed_map) = run(&scene, &config, &[Stop::Frame(2), Stop::Frame(9)]);
+    assert_eq!(resumed_map, map, "map snapshot");
+    assert_eq!(resumed_categories, categories, "categories");
+    assert_eq!(
+        resumed.objects.keys().collect::<Vec<_>>(),
+        meshes.objects.keys().collect::<Vec<_>>()
+    );
+    for (id, mesh) in &meshes.objects {
+        assert!(resumed.objects[id] == *mesh, "object {id}'s mesh differs");
+    }
 }
