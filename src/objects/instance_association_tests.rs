@@ -4,8 +4,8 @@ use super::*;
 use crate::objects::config::ObjectConfig;
 use crate::objects::frame_observation::observe_objects;
 use crate::objects::segment::{associate_frame, relabel_instances};
-use crate::sensor::frame::{InstanceLabel, InstanceMask, RgbdFrame};
 use crate::sensor::frame::CameraIntrinsics;
+use crate::sensor::frame::{InstanceLabel, InstanceMask, RgbdFrame};
 
 const CHAIR: ClassId = ClassId(20);
 const TABLE: ClassId = ClassId(80);

@@ -77,7 +77,10 @@ pub fn mark_unsure_borders(frame: &RgbdFrame, radius_px: u32) -> Option<RgbdFram
     for v in 0..h {
         for u in 0..w {
             let i = v * w + u;
-            for j in [(u + 1 < w).then_some(i + 1), (v + 1 < h).then_some(i + w)].into_iter().flatten() {
+            for j in [(u + 1 < w).then_some(i + 1), (v + 1 < h).then_some(i + w)]
+                .into_iter()
+                .flatten()
+            {
                 if differ(i, j) {
                     border[i] = true;
                     border[j] = true;
@@ -198,13 +201,19 @@ mod tests {
         assert_eq!(row[2], InstanceLabel::Background);
         // A mask two pixels too large on each side has every wrong pixel unsure.
         let grown = labels_of_row(&mark_unsure_borders(&frame(3, 14), 2).expect("borders"));
-        assert!([3, 4, 12, 13].iter().all(|&u| grown[u] == InstanceLabel::Unsure), "{grown:?}");
+        assert!(
+            [3, 4, 12, 13].iter().all(|&u| grown[u] == InstanceLabel::Unsure),
+            "{grown:?}"
+        );
     }
 
     #[test]
     fn no_border_band_without_a_radius_or_without_a_mask() {
         assert!(mark_unsure_borders(&frame(5, 12), 0).is_none());
-        assert!(mark_unsure_borders(&frame(0, 0), 2).is_none(), "no object pixel, no border");
+        assert!(
+            mark_unsure_borders(&frame(0, 0), 2).is_none(),
+            "no object pixel, no border"
+        );
     }
 
     #[test]
@@ -224,13 +233,20 @@ mod tests {
             ..ObjectConfig::default()
         };
         let row = labels_of_row(&trim_bleeding_masks(&grazing, &strict).expect("trims"));
-        assert_eq!(row[9], InstanceLabel::Unsure, "0.12 m beyond column 7 at 3 m: trimmed without allowance");
+        assert_eq!(
+            row[9],
+            InstanceLabel::Unsure,
+            "0.12 m beyond column 7 at 3 m: trimmed without allowance"
+        );
         let allowing = ObjectConfig {
             bleed_depth_per_m: 0.1,
             ..strict
         };
         let row = labels_of_row(&trim_bleeding_masks(&grazing, &allowing).expect("the wall still bleeds"));
         assert!((5..12).all(|u| row[u] == InstanceLabel::Object(ObjectId(4))), "{row:?}");
-        assert!([3, 4, 12, 13].iter().all(|&u| row[u] == InstanceLabel::Unsure), "{row:?}");
+        assert!(
+            [3, 4, 12, 13].iter().all(|&u| row[u] == InstanceLabel::Unsure),
+            "{row:?}"
+        );
     }
 }

@@ -9,10 +9,10 @@ use nalgebra::Point3;
 use crate::ids::ObjectId;
 use crate::objects::config::ObjectConfig;
 use crate::objects::frame_observation::{FrameObservation, observe_objects};
-use crate::objects::mask_trim::{mark_unsure_borders, trim_bleeding_masks};
 use crate::objects::instance_association::{
     AssociationConfig, InstanceSource, InstanceTracker, MaskEvidence, MaskFate,
 };
+use crate::objects::mask_trim::{mark_unsure_borders, trim_bleeding_masks};
 use crate::sensor::frame::{InstanceLabel, InstanceMask, RgbdFrame};
 
 /// The masks of `frame` as the association sees them: every mask of `observation`, its majority

@@ -92,6 +92,12 @@ pub struct RunArgs {
     /// [default: the config's `objects.association.instances`, consistent]
     #[arg(long, value_enum)]
     pub instances: Option<InstancesArg>,
+    /// The masks' borders: exact (rendered, annotated) or a 2D segmenter's (a pixel or two off,
+    /// filling narrow gaps): `segmenter` trims mask pixels far behind their object and ignores a
+    /// band around every border [default: the config's `objects.bleed_*` and
+    /// `objects.mask_border_px`, exact]
+    #[arg(long, value_enum)]
+    pub masks: Option<MasksArg>,
     /// Continue the interrupted run whose output folder is DIR (from `DIR/checkpoint`), with the
     /// settings it started with; other options are ignored.
     #[arg(long, value_name = "DIR")]
@@ -105,6 +111,15 @@ pub enum InstancesArg {
     Consistent,
     /// Every frame numbers its masks anew.
     PerFrame,
+}
+
+/// `--masks` values.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MasksArg {
+    /// Exact masks (Replica, ScanNet, the synthetic scenes without noise).
+    Exact,
+    /// A 2D segmenter's masks.
+    Segmenter,
 }
 
 /// Representative choices.
@@ -215,6 +230,12 @@ fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
             InstancesArg::Consistent => catmap::objects::instance_association::InstanceSource::Consistent,
             InstancesArg::PerFrame => catmap::objects::instance_association::InstanceSource::PerFrame,
         };
+    }
+    if let Some(masks) = args.masks {
+        config.objects = config.objects.clone().with_mask_borders(match masks {
+            MasksArg::Exact => catmap::objects::config::MaskBorders::Exact,
+            MasksArg::Segmenter => catmap::objects::config::MaskBorders::Segmenter,
+        });
     }
     if let Some(fps) = args.fps {
         config.stream.live.fps = Some(fps);

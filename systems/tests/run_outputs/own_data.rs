@@ -90,6 +90,14 @@ fn the_readmes_own_data_walk_through_maps_a_tum_layout_sequence_with_per_frame_m
     assert!(!object_meshes(&out).is_empty(), "objects mapped: {stderr}");
     let summary = json(&out.join("summary.json"));
     assert_eq!(summary["frames"], 8, "eight frames mapped: {summary}");
+    if run.contains("--masks segmenter") {
+        let objects = &summary["config"]["objects"];
+        assert_eq!(
+            (&objects["bleed_radius_px"], &objects["mask_border_px"]),
+            (&serde_json::json!(4), &serde_json::json!(2)),
+            "--masks segmenter sets the trim and the border band: {objects}"
+        );
+    }
     let metrics = json(&out.join("metrics.json"));
     let scored = metrics["objects"].as_array().map_or(0, Vec::len);
     assert!(scored > 0, "objects scored against the scene's gt_meshes: {metrics}");
