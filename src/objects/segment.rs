@@ -54,8 +54,9 @@ pub fn associate_frame(
 }
 
 /// The segment stage's work on one frame: bleeding mask pixels trimmed (`bleed_radius_px`),
-/// masks' borders made unsure (`mask_border_px`), the pixels grouped by object, and, with per-frame ids, the masks associated into objects by
-/// `tracker`. Returns the frame when it changed, and its observation.
+/// masks' borders made unsure (`mask_border_px`), the pixels grouped by object, and, with
+/// per-frame ids, the masks associated into objects by `tracker`. Returns the frame when it
+/// changed, and its observation.
 pub fn segment_frame(
     frame: &RgbdFrame,
     cfg: &ObjectConfig,
@@ -63,11 +64,11 @@ pub fn segment_frame(
 ) -> (Option<RgbdFrame>, FrameObservation) {
     let trimmed = trim_bleeding_masks(frame, cfg);
     let bordered = mark_unsure_borders(trimmed.as_ref().unwrap_or(frame), cfg.mask_border_px);
-    let trimmed = bordered.or(trimmed);
-    let frame_now = trimmed.as_ref().unwrap_or(frame);
+    let changed = bordered.or(trimmed);
+    let frame_now = changed.as_ref().unwrap_or(frame);
     let observation = observe_objects(frame_now, cfg);
     match cfg.association.instances {
-        InstanceSource::Consistent => (trimmed, observation),
+        InstanceSource::Consistent => (changed, observation),
         InstanceSource::PerFrame => {
             let (relabelled, observation) = associate_frame(tracker, frame_now, &observation, cfg);
             (Some(relabelled), observation)
