@@ -4,9 +4,9 @@
 //!
 //! [`trim_bleeding_masks`] labels such pixels [`InstanceLabel::Unsure`]: an object pixel whose
 //! depth lies more than `bleed_depth_m` beyond the nearest pixel of the same object within
-//! `bleed_radius_px` (a square window), plus `bleed_depth_per_m` per metre of its depth. A pixel on the object itself has a neighbour of its
-//! object at about its own depth; a pixel past the object's silhouette has the silhouette much
-//! nearer. Where an object hides part of itself (a chair's back leg beside its front leg), the
+//! `bleed_radius_px` (a square window), plus `bleed_depth_per_m` per metre of its depth. A pixel
+//! on the object itself has a neighbour of its object at about its own depth; a pixel past the
+//! object's silhouette has the silhouette much nearer. Where an object hides part of itself (a chair's back leg beside its front leg), the
 //! hidden part's edge pixels are trimmed too; with exact masks nothing else changes.
 //!
 //! [`mark_unsure_borders`] does not look at depth: every pixel within a few pixels of a mask's
