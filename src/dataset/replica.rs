@@ -214,6 +214,29 @@ impl ReplicaSequence {
 
 /// Decodes the four images of a frame in parallel; errors are reported in the order rgb, depth,
 /// class, instance.
+/// A frame of checked images (depth in metres), each pixel labelled by [`replica_label`].
+pub(crate) fn labelled_frame(
+    index: FrameIndex,
+    world_from_camera: Isometry3<f32>,
+    intrinsics: CameraIntrinsics,
+    (rgb, depth, classes, instances): (Image<[u8; 3]>, Image<f32>, Image<u32>, Image<u16>),
+) -> RgbdFrame {
+    let labels = classes
+        .pixels
+        .iter()
+        .zip(&instances.pixels)
+        .map(|(&c, &i)| replica_label(c, u32::from(i)));
+    RgbdFrame {
+        index,
+        world_from_camera,
+        intrinsics,
+        rgb: rgb.pixels,
+        depth_m: depth.pixels,
+        instances: InstanceMask::from_labels(labels),
+        classes: classes.pixels.into_iter().map(ClassId).collect(),
+    }
+}
+
 fn decode_frame_images(
     rgb: &Path,
     depth: &Path,
@@ -270,20 +293,12 @@ impl FrameSource for ReplicaSequence {
         require_size(&instances, size, &instance_path, same_as_depth)?;
 
         depth_to_metres_in_place(&mut depth.pixels, self.depth_scale, self.max_depth_m);
-        let labels = classes
-            .pixels
-            .iter()
-            .zip(&instances.pixels)
-            .map(|(&c, &i)| replica_label(c, u32::from(i)));
-        Ok(RgbdFrame {
-            index: FrameIndex(frame.index),
-            world_from_camera: frame.world_from_camera,
-            intrinsics: self.intrinsics,
-            rgb: rgb.pixels,
-            depth_m: depth.pixels,
-            instances: InstanceMask::from_labels(labels),
-            classes: classes.pixels.into_iter().map(ClassId).collect(),
-        })
+        Ok(labelled_frame(
+            FrameIndex(frame.index),
+            frame.world_from_camera,
+            self.intrinsics,
+            (rgb, depth, classes, instances),
+        ))
     }
 
     fn name(&self) -> String {

@@ -93,47 +93,49 @@ pub(crate) fn write_ground_truth(scene: &SyntheticScene, dir: &Path) -> Result<(
     Ok(())
 }
 
-/// Writes the four images of frame `i`.
+/// Writes the four images of frame `i` in the Replica layout.
 fn write_frame(dir: &Path, i: usize, frame: &RenderedFrame) -> Result<()> {
+    let paths = FrameImages {
+        rgb: dir.join(format!("rgb/rgb_{i}.png")),
+        depth: dir.join(format!("depth/depth_{i}.png")),
+        class: dir.join(format!("semantic_class/semantic_class_{i}.png")),
+        instance: dir.join(format!("semantic_instance/semantic_instance_{i}.png")),
+    };
+    write_frame_images(frame, &paths, DEPTH_SCALE)
+}
+
+/// Where a layout keeps one frame's four images.
+pub(crate) struct FrameImages {
+    pub rgb: std::path::PathBuf,
+    pub depth: std::path::PathBuf,
+    pub class: std::path::PathBuf,
+    pub instance: std::path::PathBuf,
+}
+
+/// Writes `frame`'s colour (RGB8), depth (uint16, `depth_units_per_m`), class (8-bit) and
+/// instance (16-bit) images to `paths`.
+pub(crate) fn write_frame_images(frame: &RenderedFrame, paths: &FrameImages, depth_units_per_m: f32) -> Result<()> {
     let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
     let rgb: Vec<u8> = frame.rgb.iter().flatten().copied().collect();
-    write_png(
-        &dir.join(format!("rgb/rgb_{i}.png")),
-        w,
-        h,
-        &rgb,
-        ExtendedColorType::Rgb8,
-    )?;
+    write_png(&paths.rgb, w, h, &rgb, ExtendedColorType::Rgb8)?;
     let depth: Vec<u8> = frame
         .depth_m
         .iter()
-        .flat_map(|&d| depth_to_mm(d).to_ne_bytes())
+        .flat_map(|&d| depth_to_units(d, depth_units_per_m).to_ne_bytes())
         .collect();
-    write_png(
-        &dir.join(format!("depth/depth_{i}.png")),
-        w,
-        h,
-        &depth,
-        ExtendedColorType::L16,
-    )?;
+    write_png(&paths.depth, w, h, &depth, ExtendedColorType::L16)?;
     let classes: Vec<u8> = frame.classes.iter().map(|c| u8::try_from(c.0).unwrap_or(0)).collect();
-    write_png(
-        &dir.join(format!("semantic_class/semantic_class_{i}.png")),
-        w,
-        h,
-        &classes,
-        ExtendedColorType::L8,
-    )?;
+    write_png(&paths.class, w, h, &classes, ExtendedColorType::L8)?;
     let instances: Vec<u8> = frame.instance_ids.iter().flat_map(|id| id.to_ne_bytes()).collect();
-    let path = dir.join(format!("semantic_instance/semantic_instance_{i}.png"));
-    write_png(&path, w, h, &instances, ExtendedColorType::L16)
+    write_png(&paths.instance, w, h, &instances, ExtendedColorType::L16)
 }
 
-/// Depth in metres → millimetres; invalid or unrepresentable depths become 0.
-fn depth_to_mm(depth_m: f32) -> u16 {
-    let mm = (depth_m * DEPTH_SCALE).round();
-    if mm > 0.0 && mm <= f32::from(u16::MAX) {
-        mm as u16
+/// Depth in metres → `units_per_m` units (millimetres at 1000); invalid or unrepresentable depths
+/// become 0.
+pub(crate) fn depth_to_units(depth_m: f32, units_per_m: f32) -> u16 {
+    let units = (depth_m * units_per_m).round();
+    if units > 0.0 && units <= f32::from(u16::MAX) {
+        units as u16
     } else {
         0
     }
@@ -161,9 +163,13 @@ mod tests {
 
     #[test]
     fn depth_is_rounded_to_millimetres_and_clamped_to_invalid() {
-        assert_eq!(depth_to_mm(1.2344), 1234);
-        assert_eq!(depth_to_mm(0.0), 0);
-        assert_eq!(depth_to_mm(f32::NAN), 0);
-        assert_eq!(depth_to_mm(70.0), 0, "beyond 65.535 m is not representable");
+        assert_eq!(depth_to_units(1.2344, DEPTH_SCALE), 1234);
+        assert_eq!(depth_to_units(0.0, DEPTH_SCALE), 0);
+        assert_eq!(depth_to_units(f32::NAN, DEPTH_SCALE), 0);
+        assert_eq!(
+            depth_to_units(70.0, DEPTH_SCALE),
+            0,
+            "beyond 65.535 m is not representable"
+        );
     }
 }

@@ -19,11 +19,10 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use image::ExtendedColorType;
 use rayon::prelude::*;
 
 use super::render::RenderedFrame;
-use super::replica_writer::{write_ground_truth, write_json, write_png};
+use super::replica_writer::{FrameImages, write_frame_images, write_ground_truth, write_json};
 use super::scene::SyntheticScene;
 use crate::atomic_file::write_atomic;
 use crate::dataset::FrameSource;
@@ -103,64 +102,33 @@ pub fn write_tum_layout(scene: &SyntheticScene, dir: &Path, progress: impl Fn(us
     write_ground_truth(scene, dir)
 }
 
-/// Writes the four images of frame `i`.
+/// Writes the four images of frame `i` in the TUM layout.
 fn write_frame(dir: &Path, i: usize, frame: &RenderedFrame) -> Result<()> {
-    let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
     let (stamp, depth_stamp) = (rgb_timestamp(i), depth_timestamp(i));
-    let rgb: Vec<u8> = frame.rgb.iter().flatten().copied().collect();
-    write_png(
-        &dir.join(format!("rgb/{stamp}.png")),
-        w,
-        h,
-        &rgb,
-        ExtendedColorType::Rgb8,
-    )?;
-    let depth: Vec<u8> = frame
-        .depth_m
-        .iter()
-        .flat_map(|&d| depth_to_units(d).to_ne_bytes())
-        .collect();
-    let depth_path = dir.join(format!("depth/{depth_stamp}.png"));
-    write_png(&depth_path, w, h, &depth, ExtendedColorType::L16)?;
-    let classes: Vec<u8> = frame.classes.iter().map(|c| u8::try_from(c.0).unwrap_or(0)).collect();
-    write_png(
-        &dir.join(format!("class/{stamp}.png")),
-        w,
-        h,
-        &classes,
-        ExtendedColorType::L8,
-    )?;
-    let instances: Vec<u8> = frame.instance_ids.iter().flat_map(|id| id.to_ne_bytes()).collect();
-    write_png(
-        &dir.join(format!("instance/{stamp}.png")),
-        w,
-        h,
-        &instances,
-        ExtendedColorType::L16,
-    )
-}
-
-/// Depth in metres → TUM's units (0.2 mm); invalid or unrepresentable depths (beyond 13.1 m)
-/// become 0.
-fn depth_to_units(depth_m: f32) -> u16 {
-    let units = (depth_m * TUM_DEPTH_SCALE).round();
-    if units > 0.0 && units <= f32::from(u16::MAX) {
-        units as u16
-    } else {
-        0
-    }
+    let paths = FrameImages {
+        rgb: dir.join(format!("rgb/{stamp}.png")),
+        depth: dir.join(format!("depth/{depth_stamp}.png")),
+        class: dir.join(format!("class/{stamp}.png")),
+        instance: dir.join(format!("instance/{stamp}.png")),
+    };
+    write_frame_images(frame, &paths, TUM_DEPTH_SCALE)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::synth::replica_writer::depth_to_units;
 
     #[test]
     fn depth_is_written_in_fifths_of_a_millimetre_and_clamped_to_invalid() {
-        assert_eq!(depth_to_units(1.2344), 6172);
-        assert_eq!(depth_to_units(0.0), 0);
-        assert_eq!(depth_to_units(f32::NAN), 0);
-        assert_eq!(depth_to_units(13.2), 0, "beyond 13.107 m is not representable");
+        assert_eq!(depth_to_units(1.2344, TUM_DEPTH_SCALE), 6172);
+        assert_eq!(depth_to_units(0.0, TUM_DEPTH_SCALE), 0);
+        assert_eq!(depth_to_units(f32::NAN, TUM_DEPTH_SCALE), 0);
+        assert_eq!(
+            depth_to_units(13.2, TUM_DEPTH_SCALE),
+            0,
+            "beyond 13.107 m is not representable"
+        );
     }
 
     #[test]

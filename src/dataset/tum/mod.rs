@@ -17,8 +17,8 @@
 //! reason at [`TumSequence::open`]. The depth scale is [`TumOptions::depth_scale`], else
 //! `intrinsics.json`'s `depth_scale`, else TUM's 5000 units per metre. TUM ships no intrinsics
 //! file; its cameras are in its documentation. Pixels of instance 0 or of a background class are
-//! background ([`replica_label`]). A frame's index is its line's position among `rgb.txt`'s
-//! images, so skipped images leave gaps.
+//! background ([`crate::dataset::replica::replica_label`]). A frame's index is its line's
+//! position among `rgb.txt`'s images, so skipped images leave gaps.
 
 pub mod association;
 mod camera;
@@ -36,10 +36,10 @@ use crate::dataset::config::DatasetConfig;
 use crate::dataset::images::{
     Image, check_depth_options, depth_to_metres_in_place, read_grey, read_grey_as, read_rgb, require_size, size_text,
 };
-use crate::dataset::replica::replica_label;
+use crate::dataset::replica::labelled_frame;
 use crate::error::{CatmapError, Result};
-use crate::ids::{ClassId, FrameIndex};
-use crate::sensor::frame::{CameraIntrinsics, InstanceMask, RgbdFrame};
+use crate::ids::FrameIndex;
+use crate::sensor::frame::{CameraIntrinsics, RgbdFrame};
 use association::{MAX_TIME_DIFFERENCE_S, Unmatched, associate};
 use camera::resolve_camera;
 use lists::{TimedFile, TimedPose, read_file_list, read_groundtruth};
@@ -326,20 +326,12 @@ impl FrameSource for TumSequence {
         require_size(&instances, size, &instance_path, same_as_depth).map_err(|e| listed_at(e, &mask_place))?;
 
         depth_to_metres_in_place(&mut depth.pixels, self.depth_scale, self.max_depth_m);
-        let labels = classes
-            .pixels
-            .iter()
-            .zip(&instances.pixels)
-            .map(|(&c, &i)| replica_label(c, u32::from(i)));
-        Ok(RgbdFrame {
-            index: FrameIndex(frame.ordinal),
-            world_from_camera: frame.world_from_camera,
-            intrinsics: self.intrinsics,
-            rgb: rgb.pixels,
-            depth_m: depth.pixels,
-            instances: InstanceMask::from_labels(labels),
-            classes: classes.pixels.into_iter().map(ClassId).collect(),
-        })
+        Ok(labelled_frame(
+            FrameIndex(frame.ordinal),
+            frame.world_from_camera,
+            self.intrinsics,
+            (rgb, depth, classes, instances),
+        ))
     }
 
     fn name(&self) -> String {
