@@ -116,6 +116,20 @@ fn run(scene: &SyntheticScene, config: &MapperConfig, stops: &[Stop]) -> (MapMes
     (meshes, categories, map)
 }
 
+/// The resumed run's map snapshot, categories and object meshes equal the uninterrupted one's.
+fn assert_same_run(resumed: (&MapMeshes, &String, &String), reference: (&MapMeshes, &String, &String)) {
+    let ((resumed, resumed_categories, resumed_map), (meshes, categories, map)) = (resumed, reference);
+    assert_eq!(resumed_map, map, "map snapshot");
+    assert_eq!(resumed_categories, categories, "categories");
+    assert_eq!(
+        resumed.objects.keys().collect::<Vec<_>>(),
+        meshes.objects.keys().collect::<Vec<_>>()
+    );
+    for (id, mesh) in &meshes.objects {
+        assert!(resumed.objects[id] == *mesh, "object {id}'s mesh differs");
+    }
+}
+
 #[test]
 fn a_restored_mapper_continues_to_the_same_map_as_an_uninterrupted_one() {
     let scene = SyntheticScene::generate(4, Preset::Small).expect("small scene");
@@ -127,15 +141,10 @@ fn a_restored_mapper_continues_to_the_same_map_as_an_uninterrupted_one() {
     );
     let stops = [Stop::Frame(1), Stop::Frame(8), Stop::AfterStream, Stop::Categories];
     let (resumed, resumed_categories, resumed_map) = run(&scene, &config(), &stops);
-    assert_eq!(resumed_map, map, "map snapshot");
-    assert_eq!(resumed_categories, categories, "categories");
-    assert_eq!(
-        resumed.objects.keys().collect::<Vec<_>>(),
-        meshes.objects.keys().collect::<Vec<_>>()
+    assert_same_run(
+        (&resumed, &resumed_categories, &resumed_map),
+        (&meshes, &categories, &map),
     );
-    for (id, mesh) in &meshes.objects {
-        assert!(resumed.objects[id] == *mesh, "object {id}'s mesh differs");
-    }
     assert!(resumed.background == meshes.background, "background mesh differs");
 }
 
@@ -179,13 +188,8 @@ fn a_run_with_per_frame_ids_restored_mid_stream_continues_to_the_same_map() {
     );
     // Frame 2 holds only candidates (seen in 3 frames they become objects), frame 9 objects.
     let (resumed, resumed_categories, resumed_map) = run(&scene, &config, &[Stop::Frame(2), Stop::Frame(9)]);
-    assert_eq!(resumed_map, map, "map snapshot");
-    assert_eq!(resumed_categories, categories, "categories");
-    assert_eq!(
-        resumed.objects.keys().collect::<Vec<_>>(),
-        meshes.objects.keys().collect::<Vec<_>>()
+    assert_same_run(
+        (&resumed, &resumed_categories, &resumed_map),
+        (&meshes, &categories, &map),
     );
-    for (id, mesh) in &meshes.objects {
-        assert!(resumed.objects[id] == *mesh, "object {id}'s mesh differs");
-    }
 }
