@@ -2,6 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::sensor::depth_smoothing::{BilateralDepth, DepthSmoothing};
+
 /// Reader thread and channel.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -89,6 +91,11 @@ pub struct DatasetConfig {
     pub depth_scale: f32,
     /// Depth beyond this is treated as invalid, metres.
     pub max_depth_m: f32,
+    /// How depth images are smoothed before use: `none`, or `bilateral` for a depth camera's
+    /// noise ([`crate::sensor::depth_smoothing`]; `catmap run --depth bilateral`).
+    pub depth_smoothing: DepthSmoothing,
+    /// The bilateral filter's parameters (used with `depth_smoothing = "bilateral"`).
+    pub bilateral: BilateralDepth,
 }
 
 impl Default for DatasetConfig {
@@ -96,6 +103,8 @@ impl Default for DatasetConfig {
         Self {
             depth_scale: 1000.0,
             max_depth_m: 8.0,
+            depth_smoothing: DepthSmoothing::None,
+            bilateral: BilateralDepth::default(),
         }
     }
 }

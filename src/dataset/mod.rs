@@ -1,6 +1,6 @@
 //! Datasets as random-access frame sources: the Replica (vMAP layout), ScanNet and TUM RGB-D
 //! (with per-frame mask folders) readers, and the built-in synthetic scenes, all behind
-//! [`FrameSource`].
+//! [`FrameSource`]; [`smoothed_depth`] smooths any source's depth.
 
 pub mod camera_spec;
 pub mod class_names;
@@ -12,6 +12,7 @@ pub mod live_replay;
 pub mod replica;
 pub mod resize;
 pub mod scannet;
+pub mod smoothed_depth;
 pub mod stream;
 pub mod tum;
 

@@ -13,12 +13,16 @@
 //! - d − m ≤ z < d − [`GLIMPSE_MARGIN_M`] on another object's (or the background's) pixel: the
 //!   ray passed the centre, if not the whole cell, before the surface behind it — **glimpsed**
 //!   (the floor seen under a bed's frame through a 12 cm gap, two cells of 6 cm: their centres
-//!   are nearer to the floor than the half diagonal, 9 cm).
+//!   are nearer to the floor than the half diagonal, 9 cm);
+//! - on a pixel without depth, not the object's, whose neighbours within
+//!   [`NO_RETURN_RADIUS_PX`] have none either: the sensor saw nothing within its range there
+//!   (a room's far wall beyond a Kinect's 5 m) — **free**; on any other pixel without depth the
+//!   view says nothing.
 //!
 //! Over all views a cell is, in this order of precedence: seen free (free in one view), occluded
 //! (behind another surface in one), surface, glimpsed, hidden (behind the object's surface in
-//! one), or unknown. Cells that project outside a crop or onto invalid depth learn nothing from
-//! that view.
+//! one), or unknown. Cells that project outside a crop, or onto a pixel without depth that is
+//! not a no-return patch, learn nothing from that view.
 //!
 //! A hidden cell whose walk sideways (along box x or y, through hidden cells) ends at a cell seen
 //! free, glimpsed or occluded opens sideways ([`EvidenceGrid::open_sideways`]); one whose walk
@@ -33,6 +37,10 @@ use super::object_view::{ObjectView, PixelState};
 /// How far before the surface on its pixel (another object's or the background's) a cell's
 /// centre must lie for the view to have glimpsed through the cell, metres of camera depth.
 pub const GLIMPSE_MARGIN_M: f32 = 0.02;
+
+/// Half the edge of the window of pixels without depth that makes a pixel without depth a view
+/// of nothing within the sensor's range: a point projecting there is seen free.
+pub const NO_RETURN_RADIUS_PX: u32 = 2;
 
 /// How far behind another object's surface a point may be that object's, metres of camera
 /// depth: deeper, the view says nothing of it (a sofa's base 1 m behind the armchair in front
@@ -149,7 +157,11 @@ pub(crate) fn view_evidence(view: &ObjectView, p_world: &Point3<f32>, margin_m: 
     };
     let d = view.depth_m[i];
     if !(d.is_finite() && d > 0.0) {
-        ViewEvidence::Nothing
+        if view.states[i] != PixelState::ThisObject && no_depth_around(view, u as u32, v as u32) {
+            ViewEvidence::Free
+        } else {
+            ViewEvidence::Nothing
+        }
     } else if p_camera.z < d - margin_m {
         ViewEvidence::Free
     } else if p_camera.z <= d + margin_m {
@@ -170,6 +182,17 @@ pub(crate) fn view_evidence(view: &ObjectView, p_world: &Point3<f32>, margin_m: 
             | PixelState::SeenFree => ViewEvidence::Nothing,
         }
     }
+}
+
+/// Whether no pixel of `view`'s crop within [`NO_RETURN_RADIUS_PX`] of `(u, v)` has a depth: a
+/// patch the sensor got no return from, which is nothing within its range (or beyond
+/// `dataset.max_depth_m`). A depth camera's holes at depth edges and its random dropouts are a
+/// pixel or two wide, with valid neighbours.
+fn no_depth_around(view: &ObjectView, u: u32, v: u32) -> bool {
+    let r = NO_RETURN_RADIUS_PX;
+    (v.saturating_sub(r)..=v + r).all(|y| {
+        (u.saturating_sub(r)..=u + r).all(|x| view.index_of(x, y).is_none_or(|j| view.depth_m[j].is_nan() || view.depth_m[j] <= 0.0))
+    })
 }
 
 /// What all `views` together say of the point: seen free in any view wins, then behind another

@@ -22,6 +22,11 @@ pub struct ObjectConfig {
     pub bounds_refresh_growth: f32,
     /// Voxel edge used to thin the cloud before fitting the oriented box, metres.
     pub bounds_voxel_m: f32,
+    /// Cloud voxels holding fewer points than this are left out of the box fit: a depth
+    /// camera's stray points each land in a voxel of their own, while a surface fills its voxels
+    /// frame after frame. All voxels count while fewer than
+    /// [`crate::objects::object_bounds::MIN_POINTS_FOR_BOX`] hold enough.
+    pub box_min_voxel_points: u32,
     /// Only every n-th background pixel in each direction feeds the background cloud.
     pub background_pixel_stride: u32,
     /// Voxel edge of the background's observed cloud, metres.
@@ -101,6 +106,7 @@ impl Default for ObjectConfig {
             min_extent_m: 0.10,
             bounds_refresh_growth: 0.1,
             bounds_voxel_m: 0.02,
+            box_min_voxel_points: 1,
             background_pixel_stride: 4,
             background_voxel_m: 0.05,
             box_fit: None,

@@ -2,6 +2,7 @@ use nalgebra::Point3;
 
 use super::*;
 use crate::objects::cell_evidence::{CellEvidence, cell_evidence};
+use crate::objects::object_view::PixelState;
 use crate::objects::view_fixtures::{Solid, aabb, render, render_pitched, slab_and_box};
 use crate::rng::{RngStream, seeded_rng};
 
@@ -46,6 +47,30 @@ fn cells_behind_the_seen_face_are_hidden_and_cells_seen_through_are_not() {
             "a hidden cell at {world} lies behind the slab, where the side view saw through"
         );
     }
+}
+
+#[test]
+fn a_patch_with_no_return_is_seen_through_and_a_lone_hole_says_nothing() {
+    let (scene, _) = slab_and_box();
+    let front = render([0.0, -1.0, 0.2], 0.0, &scene);
+    let behind = Point3::new(0.0, 1.3, 0.2);
+    let margin = 0.03;
+    // The side view's room lies beyond the sensor's range: no depth anywhere but on the slab.
+    let mut far = render([2.0, 1.2, 0.2], -std::f32::consts::FRAC_PI_2, &scene);
+    for (d, state) in far.depth_m.iter_mut().zip(&far.states) {
+        if *state != PixelState::ThisObject {
+            *d = 0.0;
+        }
+    }
+    assert_eq!(cell_evidence(&[&front, &far], &behind, margin), CellEvidence::SeenFree);
+    // A single pixel without depth, its neighbours valid (a dropout, a hole at an edge): the
+    // view says nothing there, and the cell stays hidden behind the front face.
+    let mut holed = render([2.0, 1.2, 0.2], -std::f32::consts::FRAC_PI_2, &scene);
+    let seen = holed.world_from_camera.inverse_transform_point(&behind);
+    let (x, y) = holed.intrinsics.project(&seen).expect("in front of the side view");
+    let i = holed.index_of(x.round() as u32, y.round() as u32).expect("in the image");
+    holed.depth_m[i] = 0.0;
+    assert_eq!(cell_evidence(&[&front, &holed], &behind, margin), CellEvidence::Hidden);
 }
 
 #[test]

@@ -106,8 +106,9 @@ pub fn refit_stale_boxes<'a, K: Send>(
         .collect()
 }
 
-/// The box of the cloud, thinned to `bounds_voxel_m`, fitted as `box_fit` says (unset: the
-/// minimum-volume box), every edge ≥ `min_extent_m`.
+/// The box of the cloud's voxels holding at least `box_min_voxel_points` points (all of them
+/// when fewer than [`MIN_POINTS_FOR_BOX`] do), thinned to `bounds_voxel_m`, fitted as `box_fit`
+/// says (unset: the minimum-volume box), every edge ≥ `min_extent_m`.
 pub fn fit_object_box(cloud: &ObservedCloud, cfg: &ObjectConfig) -> Result<OrientedBox> {
     Ok(fit_object_bounds(cloud, MirrorStep::Keep(None), cfg)?.oriented_box)
 }
@@ -121,7 +122,11 @@ pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &Object
             cloud.len()
         )));
     }
-    let thinned = voxel_downsample(&cloud.points(), cfg.bounds_voxel_m);
+    let mut kept = cloud.points_of_voxels_with(cfg.box_min_voxel_points);
+    if kept.len() < MIN_POINTS_FOR_BOX {
+        kept = cloud.points();
+    }
+    let thinned = voxel_downsample(&kept, cfg.bounds_voxel_m);
     let oriented_box = match cfg.box_fit.unwrap_or_default() {
         BoxFit::MinimumVolume => fit_minimum_volume_box(&thinned)?,
         BoxFit::Upright => fit_upright_box(&thinned)?,
@@ -153,6 +158,36 @@ mod tests {
         assert!(box_is_stale(None, 10, 0.1));
         assert!(!box_is_stale(Some(100), 110, 0.1));
         assert!(box_is_stale(Some(100), 111, 0.1));
+    }
+
+    #[test]
+    fn voxels_with_too_few_points_are_left_out_of_the_box_unless_too_few_remain() {
+        // A 40 cm square seen five times over, and three stray points a metre off.
+        let mut cloud = ObservedCloud::new(0.01);
+        for _ in 0..5 {
+            for i in 0..40 {
+                for j in 0..40 {
+                    cloud.add_point(&Point3::new(0.005 + i as f32 * 0.01, 0.005 + j as f32 * 0.01, 0.5));
+                }
+            }
+        }
+        for k in 0..3 {
+            cloud.add_point(&Point3::new(1.5 + k as f32 * 0.1, 0.2, 0.5));
+        }
+        let all = fit_object_box(&cloud, &ObjectConfig::default()).expect("enough points");
+        assert!(all.extents().max() > 1.0, "the stray points stretch it: {:?}", all.extents());
+        let cfg = ObjectConfig {
+            box_min_voxel_points: 3,
+            ..ObjectConfig::default()
+        };
+        let kept = fit_object_box(&cloud, &cfg).expect("enough points");
+        assert!(kept.extents().max() < 0.6, "the square alone: {:?}", kept.extents());
+        // A cloud seen once has no voxel of three points: every voxel counts.
+        let mut once = ObservedCloud::new(0.01);
+        for i in 0..20 {
+            once.add_point(&Point3::new(i as f32 * 0.02, 0.0, 0.5));
+        }
+        assert!(fit_object_box(&once, &cfg).is_ok());
     }
 
     #[test]

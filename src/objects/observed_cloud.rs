@@ -144,9 +144,15 @@ impl ObservedCloud {
     /// One point per occupied voxel (the centroid of its points), sorted by voxel key so that
     /// the order does not depend on hashing.
     pub fn points(&self) -> Vec<Point3<f32>> {
+        self.points_of_voxels_with(1)
+    }
+
+    /// The centroids of the voxels holding at least `min_points` points, in key order.
+    pub fn points_of_voxels_with(&self, min_points: u32) -> Vec<Point3<f32>> {
         let mut keyed: Vec<(u64, Point3<f32>)> = self
             .voxels
             .iter()
+            .filter(|(_, v)| v.count >= min_points)
             .map(|(&k, v)| (k, Point3::from((v.sum / f64::from(v.count)).cast::<f32>())))
             .collect();
         keyed.sort_unstable_by_key(|(k, _)| *k);

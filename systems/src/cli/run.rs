@@ -98,6 +98,13 @@ pub struct RunArgs {
     /// `objects.mask_border_px`, exact]
     #[arg(long, value_enum)]
     pub masks: Option<MasksArg>,
+    /// The depth images: exact (rendered, Replica's) or a depth camera's (noise growing with
+    /// distance, stray points): `camera` smooths each depth image with an edge-preserving
+    /// bilateral filter before use and fits boxes to cloud voxels holding at least 3 points
+    /// [default: the config's `dataset.depth_smoothing` and `objects.box_min_voxel_points`,
+    /// exact]
+    #[arg(long, value_enum)]
+    pub depth: Option<DepthArg>,
     /// Continue the interrupted run whose output folder is DIR (from `DIR/checkpoint`), with the
     /// settings it started with; other options are ignored.
     #[arg(long, value_name = "DIR")]
@@ -120,6 +127,15 @@ pub enum MasksArg {
     Exact,
     /// A 2D segmenter's masks.
     Segmenter,
+}
+
+/// `--depth` values.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DepthArg {
+    /// Exact depth, used as read.
+    Exact,
+    /// A depth camera's depth, smoothed (bilateral filter).
+    Camera,
 }
 
 /// Representative choices.
@@ -235,6 +251,12 @@ fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
         config.objects = config.objects.clone().with_mask_borders(match masks {
             MasksArg::Exact => catmap::objects::config::MaskBorders::Exact,
             MasksArg::Segmenter => catmap::objects::config::MaskBorders::Segmenter,
+        });
+    }
+    if let Some(depth) = args.depth {
+        config = config.with_depth_images(match depth {
+            DepthArg::Exact => catmap::sensor::depth_smoothing::DepthImages::Exact,
+            DepthArg::Camera => catmap::sensor::depth_smoothing::DepthImages::Camera,
         });
     }
     if let Some(fps) = args.fps {

@@ -10,6 +10,7 @@ use catmap::dataset::FrameSource;
 use catmap::dataset::camera_spec::parse_camera_spec;
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
 use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
+use catmap::dataset::smoothed_depth::with_depth_smoothing;
 use catmap::dataset::tum::{TumOptions, TumSequence};
 use serde::{Deserialize, Serialize};
 
@@ -95,7 +96,7 @@ impl RunPlan {
             .transpose()
             .context("--camera")?;
         let dir = &self.dataset;
-        Ok(match self.format.resolve(dir) {
+        let source: Arc<dyn FrameSource> = match self.format.resolve(dir) {
             DatasetFormat::Replica => {
                 let options = ReplicaOptions {
                     camera,
@@ -125,7 +126,9 @@ impl RunPlan {
                 };
                 Arc::new(TumSequence::open(dir, &options)?)
             }
-        })
+        };
+        let dataset = &config.dataset;
+        Ok(with_depth_smoothing(source, dataset.depth_smoothing, &dataset.bilateral))
     }
 
     /// Opens the recording: a connection, or the temporary sibling of the file (see

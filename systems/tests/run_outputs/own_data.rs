@@ -98,6 +98,14 @@ fn the_readmes_own_data_walk_through_maps_a_tum_layout_sequence_with_per_frame_m
             "--masks segmenter sets the trim and the border band: {objects}"
         );
     }
+    if run.contains("--depth camera") {
+        let config = &summary["config"];
+        assert_eq!(
+            (&config["dataset"]["depth_smoothing"], &config["objects"]["box_min_voxel_points"]),
+            (&serde_json::json!("bilateral"), &serde_json::json!(3)),
+            "--depth camera smooths the depth and leaves lone voxels out of the boxes: {config}"
+        );
+    }
     let metrics = json(&out.join("metrics.json"));
     let scored = metrics["objects"].as_array().map_or(0, Vec::len);
     assert!(scored > 0, "objects scored against the scene's gt_meshes: {metrics}");
