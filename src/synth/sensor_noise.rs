@@ -15,6 +15,9 @@
 //! 5. **Class confusion**: with probability `class_confusion_probability` an object's mask carries
 //!    another of the scene's object classes in a frame.
 //!
+//! [`SensorModel::KinectDepth`] applies steps 1 and 2 only, [`SensorModel::SegmenterMasks`]
+//! steps 3–5 only (to tell what each part costs; their draws differ from the whole model's).
+//!
 //! [`InstanceIds::PerFrame`] then gives every frame its own instance ids: the objects of a frame
 //! get distinct ids drawn from 1–99 anew, as a per-frame segmenter numbers its masks.
 //!
@@ -41,6 +44,22 @@ pub enum SensorModel {
     None,
     /// Kinect-like depth and a segmenter's masks ([`KinectNoise::default`]).
     Kinect,
+    /// The depth of [`SensorModel::Kinect`] (steps 1 and 2) with exact masks.
+    KinectDepth,
+    /// The masks of [`SensorModel::Kinect`] (steps 3–5) with exact depth.
+    SegmenterMasks,
+}
+
+impl SensorModel {
+    /// Whether the depth is degraded (steps 1 and 2).
+    pub fn degrades_depth(self) -> bool {
+        matches!(self, Self::Kinect | Self::KinectDepth)
+    }
+
+    /// Whether the masks are degraded (steps 3–5).
+    pub fn degrades_masks(self) -> bool {
+        matches!(self, Self::Kinect | Self::SegmenterMasks)
+    }
 }
 
 /// How instance ids relate across frames.
@@ -126,9 +145,11 @@ impl SensorSettings {
             return;
         }
         let mut rng = seeded_rng(seed, RngStream::SensorFrame(position as u64));
-        if self.model == SensorModel::Kinect {
-            let noise = KinectNoise::default();
+        let noise = KinectNoise::default();
+        if self.model.degrades_depth() {
             degrade_depth(frame, &noise, &mut rng);
+        }
+        if self.model.degrades_masks() {
             degrade_masks(frame, &noise, classes, &mut rng);
         }
         if self.ids == InstanceIds::PerFrame {

@@ -56,6 +56,28 @@ fn pixels_of(f: &RenderedFrame, id: u16) -> BTreeSet<usize> {
 }
 
 #[test]
+fn the_depth_part_keeps_the_masks_and_the_masks_part_keeps_the_depth() {
+    let clean = frame(3.0, 1.5);
+    let with = |model: SensorModel| {
+        let mut f = frame(3.0, 1.5);
+        let settings = SensorSettings {
+            model,
+            ids: InstanceIds::Consistent,
+        };
+        settings.apply(&mut f, 1, 4, &CLASSES);
+        f
+    };
+    let depth = with(SensorModel::KinectDepth);
+    assert_ne!(depth.depth_m, clean.depth_m);
+    assert_eq!((&depth.instance_ids, &depth.classes), (&clean.instance_ids, &clean.classes));
+    let masks = with(SensorModel::SegmenterMasks);
+    assert_eq!(masks.depth_m, clean.depth_m);
+    let all = with(SensorModel::Kinect);
+    assert_ne!(all.instance_ids, clean.instance_ids, "the whole model moves the masks");
+    assert_eq!(all.depth_m, depth.depth_m, "the depth part draws first, as in the whole model");
+}
+
+#[test]
 fn exact_settings_leave_the_frame_as_rendered() {
     let mut f = frame(3.0, 1.5);
     SensorSettings::default().apply(&mut f, 1, 0, &CLASSES);

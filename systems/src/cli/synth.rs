@@ -26,7 +26,7 @@ pub struct SynthArgs {
     #[arg(long, value_enum, default_value_t = PresetArg::Default)]
     pub preset: PresetArg,
     /// Depth camera and segmenter: exact, or Kinect-like depth noise with holes at depth edges
-    /// and a segmenter's jittered, sometimes missed or mislabelled masks.
+    /// and a segmenter's jittered, sometimes missed or mislabelled masks (or one of the two).
     #[arg(long, value_enum, default_value_t = NoiseArg::None)]
     pub noise: NoiseArg,
     /// Instance ids: one per object over the sequence, or every frame its own.
@@ -51,6 +51,10 @@ pub enum NoiseArg {
     None,
     /// Kinect-like depth and a 2D segmenter's masks.
     Kinect,
+    /// Kinect-like depth, exact masks.
+    KinectDepth,
+    /// A 2D segmenter's masks, exact depth.
+    SegmenterMasks,
 }
 
 /// `--ids` values.
@@ -69,6 +73,8 @@ impl SynthArgs {
             model: match self.noise {
                 NoiseArg::None => SensorModel::None,
                 NoiseArg::Kinect => SensorModel::Kinect,
+                NoiseArg::KinectDepth => SensorModel::KinectDepth,
+                NoiseArg::SegmenterMasks => SensorModel::SegmenterMasks,
             },
             ids: match self.ids {
                 IdsArg::Consistent => InstanceIds::Consistent,
