@@ -191,7 +191,10 @@ pub(crate) fn view_evidence(view: &ObjectView, p_world: &Point3<f32>, margin_m: 
 fn no_depth_around(view: &ObjectView, u: u32, v: u32) -> bool {
     let r = NO_RETURN_RADIUS_PX;
     (v.saturating_sub(r)..=v + r).all(|y| {
-        (u.saturating_sub(r)..=u + r).all(|x| view.index_of(x, y).is_none_or(|j| view.depth_m[j].is_nan() || view.depth_m[j] <= 0.0))
+        (u.saturating_sub(r)..=u + r).all(|x| {
+            view.index_of(x, y)
+                .is_none_or(|j| view.depth_m[j].is_nan() || view.depth_m[j] <= 0.0)
+        })
     })
 }
 

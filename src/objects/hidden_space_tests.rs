@@ -68,7 +68,9 @@ fn a_patch_with_no_return_is_seen_through_and_a_lone_hole_says_nothing() {
     let mut holed = render([2.0, 1.2, 0.2], -std::f32::consts::FRAC_PI_2, &scene);
     let seen = holed.world_from_camera.inverse_transform_point(&behind);
     let (x, y) = holed.intrinsics.project(&seen).expect("in front of the side view");
-    let i = holed.index_of(x.round() as u32, y.round() as u32).expect("in the image");
+    let i = holed
+        .index_of(x.round() as u32, y.round() as u32)
+        .expect("in the image");
     holed.depth_m[i] = 0.0;
     assert_eq!(cell_evidence(&[&front, &holed], &behind, margin), CellEvidence::Hidden);
 }

@@ -175,7 +175,11 @@ mod tests {
             cloud.add_point(&Point3::new(1.5 + k as f32 * 0.1, 0.2, 0.5));
         }
         let all = fit_object_box(&cloud, &ObjectConfig::default()).expect("enough points");
-        assert!(all.extents().max() > 1.0, "the stray points stretch it: {:?}", all.extents());
+        assert!(
+            all.extents().max() > 1.0,
+            "the stray points stretch it: {:?}",
+            all.extents()
+        );
         let cfg = ObjectConfig {
             box_min_voxel_points: 3,
             ..ObjectConfig::default()

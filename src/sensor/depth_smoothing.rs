@@ -164,7 +164,10 @@ mod tests {
         assert!(after < 0.5 * before, "rms {before} → {after}");
         for v in 0..h {
             let (near, far) = (smoothed[v * w + 19], smoothed[v * w + 20]);
-            assert!((near - 2.0).abs() < 0.02 && (far - 2.5).abs() < 0.02, "row {v}: {near} | {far}");
+            assert!(
+                (near - 2.0).abs() < 0.02 && (far - 2.5).abs() < 0.02,
+                "row {v}: {near} | {far}"
+            );
         }
     }
 
@@ -177,14 +180,26 @@ mod tests {
         let smoothed = BilateralDepth::default().smooth(&depth, w, h);
         assert_eq!(smoothed[12], 0.0);
         assert_eq!(smoothed[0], 0.0);
-        assert!(smoothed.iter().enumerate().all(|(i, &z)| i == 0 || i == 12 || (z - 1.0).abs() < 1e-6));
+        assert!(
+            smoothed
+                .iter()
+                .enumerate()
+                .all(|(i, &z)| i == 0 || i == 12 || (z - 1.0).abs() < 1e-6)
+        );
     }
 
     #[test]
     fn none_changes_nothing_and_the_parameters_are_checked() {
         let depth = vec![1.0; 4];
-        assert_eq!(DepthSmoothing::None.apply(&BilateralDepth::default(), &depth, 2, 2), None);
-        assert!(DepthSmoothing::Bilateral.apply(&BilateralDepth::default(), &depth, 2, 2).is_some());
+        assert_eq!(
+            DepthSmoothing::None.apply(&BilateralDepth::default(), &depth, 2, 2),
+            None
+        );
+        assert!(
+            DepthSmoothing::Bilateral
+                .apply(&BilateralDepth::default(), &depth, 2, 2)
+                .is_some()
+        );
         assert_eq!(BilateralDepth::default().invalid(), None);
         let zero = BilateralDepth {
             radius_px: 0,

@@ -69,12 +69,18 @@ fn the_depth_part_keeps_the_masks_and_the_masks_part_keeps_the_depth() {
     };
     let depth = with(SensorModel::KinectDepth);
     assert_ne!(depth.depth_m, clean.depth_m);
-    assert_eq!((&depth.instance_ids, &depth.classes), (&clean.instance_ids, &clean.classes));
+    assert_eq!(
+        (&depth.instance_ids, &depth.classes),
+        (&clean.instance_ids, &clean.classes)
+    );
     let masks = with(SensorModel::SegmenterMasks);
     assert_eq!(masks.depth_m, clean.depth_m);
     let all = with(SensorModel::Kinect);
     assert_ne!(all.instance_ids, clean.instance_ids, "the whole model moves the masks");
-    assert_eq!(all.depth_m, depth.depth_m, "the depth part draws first, as in the whole model");
+    assert_eq!(
+        all.depth_m, depth.depth_m,
+        "the depth part draws first, as in the whole model"
+    );
 }
 
 #[test]

@@ -128,7 +128,11 @@ impl RunPlan {
             }
         };
         let dataset = &config.dataset;
-        Ok(with_depth_smoothing(source, dataset.depth_smoothing, &dataset.bilateral))
+        Ok(with_depth_smoothing(
+            source,
+            dataset.depth_smoothing,
+            &dataset.bilateral,
+        ))
     }
 
     /// Opens the recording: a connection, or the temporary sibling of the file (see

@@ -101,7 +101,10 @@ fn the_readmes_own_data_walk_through_maps_a_tum_layout_sequence_with_per_frame_m
     if run.contains("--depth camera") {
         let config = &summary["config"];
         assert_eq!(
-            (&config["dataset"]["depth_smoothing"], &config["objects"]["box_min_voxel_points"]),
+            (
+                &config["dataset"]["depth_smoothing"],
+                &config["objects"]["box_min_voxel_points"]
+            ),
             (&serde_json::json!("bilateral"), &serde_json::json!(3)),
             "--depth camera smooths the depth and leaves lone voxels out of the boxes: {config}"
         );

@@ -30,7 +30,10 @@ fn a_depth_cameras_frames_come_closer_to_the_exact_depth_and_the_rest_passes_thr
         ids: InstanceIds::Consistent,
     }));
     let smoothed = with_depth_smoothing(noisy.clone(), DepthSmoothing::Bilateral, &BilateralDepth::default());
-    assert_eq!((smoothed.len(), smoothed.intrinsics()), (noisy.len(), noisy.intrinsics()));
+    assert_eq!(
+        (smoothed.len(), smoothed.intrinsics()),
+        (noisy.len(), noisy.intrinsics())
+    );
     assert_eq!(smoothed.name(), noisy.name());
     for position in [0, noisy.len() / 2] {
         let truth = exact.read_frame(position).expect("frame").depth_m;
@@ -40,7 +43,10 @@ fn a_depth_cameras_frames_come_closer_to_the_exact_depth_and_the_rest_passes_thr
         assert!(after < 0.8 * before, "frame {position}: rms {before} m → {after} m");
         let holes = |d: &[f32]| d.iter().filter(|z| **z <= 0.0).count();
         assert_eq!(holes(&filtered.depth_m), holes(&raw.depth_m), "holes stay holes");
-        assert_eq!((filtered.index, filtered.instances.clone()), (raw.index, raw.instances.clone()));
+        assert_eq!(
+            (filtered.index, filtered.instances.clone()),
+            (raw.index, raw.instances.clone())
+        );
         assert_eq!(filtered.world_from_camera, raw.world_from_camera);
     }
     let untouched = with_depth_smoothing(noisy.clone(), DepthSmoothing::None, &BilateralDepth::default());
