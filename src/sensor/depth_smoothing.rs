@@ -116,17 +116,6 @@ impl BilateralDepth {
     }
 }
 
-impl DepthSmoothing {
-    /// `depth_m` smoothed as `self` says with `bilateral`'s parameters; `None` when nothing
-    /// changes.
-    pub fn apply(self, bilateral: &BilateralDepth, depth_m: &[f32], width: usize, height: usize) -> Option<Vec<f32>> {
-        match self {
-            Self::None => None,
-            Self::Bilateral => Some(bilateral.smooth(depth_m, width, height)),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use rand::SeedableRng;
@@ -189,17 +178,7 @@ mod tests {
     }
 
     #[test]
-    fn none_changes_nothing_and_the_parameters_are_checked() {
-        let depth = vec![1.0; 4];
-        assert_eq!(
-            DepthSmoothing::None.apply(&BilateralDepth::default(), &depth, 2, 2),
-            None
-        );
-        assert!(
-            DepthSmoothing::Bilateral
-                .apply(&BilateralDepth::default(), &depth, 2, 2)
-                .is_some()
-        );
+    fn the_parameters_are_checked() {
         assert_eq!(BilateralDepth::default().invalid(), None);
         let zero = BilateralDepth {
             radius_px: 0,
