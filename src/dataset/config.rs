@@ -92,7 +92,7 @@ pub struct DatasetConfig {
     /// Depth beyond this is treated as invalid, metres.
     pub max_depth_m: f32,
     /// How depth images are smoothed before use: `none`, or `bilateral` for a depth camera's
-    /// noise ([`crate::sensor::depth_smoothing`]; `catmap run --depth bilateral`).
+    /// noise ([`crate::sensor::depth_smoothing`]; `catmap run --depth camera`).
     pub depth_smoothing: DepthSmoothing,
     /// The bilateral filter's parameters (used with `depth_smoothing = "bilateral"`).
     pub bilateral: BilateralDepth,
