@@ -7,6 +7,7 @@ pub mod class_update;
 pub mod field_plan;
 pub mod field_set;
 pub mod held_frames;
+pub mod member_hidden;
 pub mod nocs;
 pub mod subcategories;
 pub mod uncertainty;

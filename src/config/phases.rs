@@ -81,6 +81,17 @@ impl MapperConfig {
             .with_default_own_pixel_draws(own)
     }
 
+    /// Solid-prior rays per category member and step in the cells no member of its field saw
+    /// into: `category_fields.hidden_solid_rays`, unset [`Self::PRIOR_RAYS`] under `fast` and
+    /// none under `paper`.
+    pub fn member_solid_rays(&self) -> usize {
+        let scheduled = match self.training_policy() {
+            SchedulePolicy::Fast => Self::PRIOR_RAYS,
+            SchedulePolicy::Paper => 0,
+        };
+        self.category_fields.hidden_solid_rays.unwrap_or(scheduled)
+    }
+
     /// The class registration the run uses: `categories`, its unset subcategory assignment set
     /// by the schedule — the best explanation under `fast`, the paper's first acceptance under
     /// `paper`.
@@ -228,6 +239,19 @@ mod tests {
         let offline = config(SchedulePolicy::Fast, Protocol::Offline, Fields::Category).object_rays();
         assert_eq!(offline.solid_prior_rays(), 0, "offline runs the paper's protocol");
         assert_eq!(offline.own_pixel_draws(), 0);
+    }
+
+    #[test]
+    fn the_schedule_sets_the_members_unset_solid_prior_and_the_config_wins() {
+        let members = |c: &MapperConfig| c.member_solid_rays();
+        let mut fast = config(SchedulePolicy::Fast, Protocol::Online, Fields::Category);
+        assert_eq!(members(&fast), MapperConfig::PRIOR_RAYS);
+        let paper = config(SchedulePolicy::Paper, Protocol::Online, Fields::Category);
+        assert_eq!(members(&paper), 0, "the paper's category fields take no prior");
+        let offline = config(SchedulePolicy::Fast, Protocol::Offline, Fields::Category);
+        assert_eq!(members(&offline), 0);
+        fast.category_fields.hidden_solid_rays = Some(3);
+        assert_eq!(members(&fast), 3);
     }
 
     #[test]

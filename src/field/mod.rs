@@ -67,7 +67,9 @@ pub use heads::ALPHA_SCALE;
 pub use layout::{InitKind, ParamLayout, TensorSpec};
 pub use loss::{COLOUR_WEIGHT, DEPTH_STD_EPS, FieldLosses, OPACITY_WEIGHT};
 pub use object_field::{BACKGROUND_HIDDEN, FieldEval, OBJECT_HIDDEN, OccupancyField};
-pub use ray_sampler::{RaySamplerConfig, choose_step_views, sample_training_rays, sample_window_rays};
+pub use ray_sampler::{
+    RaySamplerConfig, choose_step_views, sample_member_rays, sample_training_rays, sample_window_rays,
+};
 pub use render::{FREE_EPS, RayRender, RenderGrad, render_ray, render_ray_backward, sigmoid};
 pub use samples::RaySamples;
 pub use simd::Backend;

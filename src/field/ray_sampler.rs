@@ -27,7 +27,7 @@ use super::solid_prior::{PriorRays, append_prior_rays};
 use crate::geometry::mirror_symmetry::MirrorPlane;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::objects::cell_evidence::{GLIMPSE_MARGIN_M, ViewEvidence, view_evidence};
-use crate::objects::hidden_space::{CellRules, FREE_CLEARANCE_M, HiddenSpaceCache};
+use crate::objects::hidden_space::{CellRules, FREE_CLEARANCE_M, HiddenSpace, HiddenSpaceCache};
 use crate::objects::keyframes::KeyframeWindow;
 use crate::objects::object_view::{ObjectView, PixelState};
 
@@ -95,6 +95,32 @@ pub fn sample_window_rays(
             free: cfg.free_cells,
         };
         let space = cache.current(&views, fitted_box, mirror, rules);
+        append_prior_rays(&mut rays, space, &views, counts, field_origin, rng);
+    }
+    rays
+}
+
+/// The rays of one step of a category member: its keyframe rays carving `meshed_box` (the
+/// region its mesh is extracted in; no own-pixel draws, no mirror), then with `shared` (the cells
+/// of its box no member of its field saw into, [`crate::categories::member_hidden`])
+/// `solid_rays` solid-prior rays drawn in them.
+pub fn sample_member_rays(
+    window: &KeyframeWindow<ObjectView>,
+    field_origin: &Point3<f32>,
+    meshed_box: &OrientedBox,
+    shared: Option<&HiddenSpace>,
+    (cfg, solid_rays): (&RaySamplerConfig, usize),
+    rng: &mut impl Rng,
+) -> RaySamples {
+    let mut rays = sample_window_rays(window, field_origin, Some(meshed_box), None, None, cfg, rng);
+    if let Some(space) = shared.filter(|_| solid_rays > 0) {
+        let views: Vec<&ObjectView> = window.slots().iter().map(|s| &s.data).collect();
+        let counts = PriorRays {
+            hidden_solid: solid_rays,
+            below_support: 0,
+            seen_free: 0,
+            weight: cfg.hidden_solid_weight,
+        };
         append_prior_rays(&mut rays, space, &views, counts, field_origin, rng);
     }
     rays

@@ -238,6 +238,9 @@ pub struct CategoryFields {
     pub pending: u64,
     /// Steps run.
     pub steps_done: u64,
+    /// Per object field index, the member's cells hidden in every member of its field (the
+    /// members' solid prior; empty for objects that are no member).
+    pub member_hidden: Vec<catmap::categories::member_hidden::MemberHiddenCache>,
 }
 
 impl CategoryFields {
@@ -247,6 +250,7 @@ impl CategoryFields {
             set: CategoryFieldSet::new(optimiser),
             pending: 0,
             steps_done: 0,
+            member_hidden: Vec::new(),
         }
     }
 }

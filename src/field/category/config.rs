@@ -31,6 +31,15 @@ pub struct CategoryFieldConfig {
     pub rays_per_object: usize,
     /// How the rays of a step are shared out among the category fields.
     pub ray_budget: CategoryRayBudget,
+    /// Solid-prior rays per member and step in the cells of its box that no member of its field
+    /// saw into (`catmap::categories::member_hidden`; the object sampler's `hidden_cells` pick
+    /// them, its `hidden_solid_weight` weighs them). `None`: the schedule's choice (the object
+    /// sampler's prior rays under `fast`, none under `paper`); 0: none.
+    pub hidden_solid_rays: Option<usize>,
+    /// The share of a member's box those cells must make up for it to take them: a side of the
+    /// design no member's camera faced (the drawer fronts of two nightstands seen from behind:
+    /// 75–82 % of their boxes), not a layer under a chair's seat (at most 6 %).
+    pub min_hidden_share: f64,
 }
 
 impl Default for CategoryFieldConfig {
@@ -41,6 +50,8 @@ impl Default for CategoryFieldConfig {
             code_dim: 32,
             rays_per_object: 120,
             ray_budget: CategoryRayBudget::PerMember,
+            hidden_solid_rays: None,
+            min_hidden_share: 0.25,
         }
     }
 }

@@ -31,6 +31,8 @@ impl CategorySamples {
             *p = [q.x, q.y, q.z];
         }
         self.rays.samples_per_ray = rays.samples_per_ray;
+        // Every member's prior rays carry its field's one weight (none without prior rays).
+        self.rays.solid_weight = self.rays.solid_weight.max(rays.solid_weight);
         self.members.extend(std::iter::repeat_n(member, rays.num_rays()));
         self.rays.points.extend(rays.points);
         self.rays.z.extend(rays.z);
@@ -69,6 +71,27 @@ mod tests {
         assert_eq!(samples.rays.points[0], [0.0, 0.0, 0.0]);
         assert!((Vector3::from(samples.rays.points[1]) - Vector3::new(0.5, 0.0, 0.0)).norm() < 1e-6);
         assert_eq!(samples.rays.z, rays.z, "depths stay metric");
+        assert_eq!(samples.rays.solid_weight, 0.0, "no prior rays, no prior weight");
+        let prior = RaySamples {
+            samples_per_ray: 2,
+            points: vec![[1.0, 2.0, 3.0]; 2],
+            z: vec![0.0, 1.0],
+            depth_m: vec![0.0],
+            rgb: vec![[0.0; 3]],
+            states: vec![PixelState::HiddenSolid],
+            solid_weight: 0.5,
+            ..RaySamples::default()
+        };
+        samples
+            .push_member_rays(prior, 5, &Point3::origin(), &world_from_nocs.inverse())
+            .unwrap();
+        samples
+            .push_member_rays(rays.clone(), 4, &Point3::new(1.0, 2.0, 3.0), &world_from_nocs.inverse())
+            .unwrap();
+        assert_eq!(
+            samples.rays.solid_weight, 0.5,
+            "a member's prior rays keep their weight"
+        );
         let mut three = rays;
         three.samples_per_ray = 1;
         three.depth_m.push(1.0);

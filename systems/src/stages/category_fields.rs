@@ -6,11 +6,17 @@
 use bevy_ecs::prelude::*;
 use catmap::FrameIndex;
 use catmap::categories::field_set::MemberRays;
-use catmap::field::{RaySamplerConfig, sample_window_rays};
+use catmap::categories::member_hidden::{
+    MemberCells, MemberHiddenCache, MemberSight, hidden_in_every_member_of_fields,
+};
+use catmap::field::{RaySamplerConfig, sample_member_rays};
 use catmap::meshing::ObjectMeshConfig;
+use catmap::objects::object_view::ObjectView;
 use rayon::prelude::*;
 
-use crate::components::{CameraFrame, CategorySlot, FieldRng, FieldSlot, Keyframes, LatestBox, Object, Subcategories};
+use crate::components::{
+    CameraFrame, CategorySlot, FieldRng, FieldSlot, Keyframes, LatestBox, Object, ObjectBounds, Subcategories,
+};
 use crate::resources::{CategoryFields, Settings, StageTimes, StreamProgress, TrainingSchedule};
 
 /// Keeps one category field per multi-member subcategory whenever a registration changed
@@ -52,6 +58,7 @@ type Members<'w, 's> = Query<
         &'static FieldSlot,
         &'static CategorySlot,
         &'static LatestBox,
+        &'static ObjectBounds,
         &'static mut FieldRng,
     ),
 >;
@@ -79,7 +86,7 @@ pub fn train_category_fields(
     let tick: Vec<FrameIndex> = frames.iter().map(|f| f.0.index).collect();
     let seen = members
         .iter()
-        .map(|(.., slot, latest, _)| (slot.field, latest.last_seen()));
+        .map(|(_, _, slot, latest, ..)| (slot.field, latest.last_seen()));
     let facts = fields.facts(seen, progress.phase(), &tick);
     let plan = schedule
         .scheduler
@@ -87,11 +94,17 @@ pub fn train_category_fields(
     schedule.planned_categories = plan.indices.len();
     let rays = fields.member_rays(objects.iter().count(), &config.category_fields, &config.object_rays());
     let meshing = &config.meshes.object;
+    let prior = MemberPrior {
+        solid_rays: config.member_solid_rays(),
+        min_share: config.category_fields.min_hidden_share,
+    };
     for _ in 0..pending {
         if plan.indices.is_empty() {
             continue;
         }
-        let step = fields.train_step(&plan, sample_members(&mut members, &plan.indices, &rays, meshing));
+        let hidden = (&mut fields.member_hidden, prior);
+        let sampled = sample_members(&mut members, &plan.indices, (&rays, meshing), hidden);
+        let step = fields.train_step(&plan, sampled);
         schedule.record_step(&plan.keys, step, &config.schedule.plateau, "category");
         fields.steps_done += 1;
     }
@@ -99,30 +112,81 @@ pub fn train_category_fields(
 
 /// The rays of every member of the `active` fields for one step, each drawn from its own
 /// keyframes and generator with its field's settings `rays`, carving the region its mesh is
-/// extracted in (its NOCS box, `meshing`'s fill; members in parallel).
+/// extracted in (its NOCS box, `meshing`'s fill), and with `prior.solid_rays` solid-prior rays in
+/// the cells of its box no member of its field saw into (`caches` by object field index; members
+/// in parallel).
 fn sample_members(
     members: &mut Members,
     active: &[usize],
-    rays: &[RaySamplerConfig],
-    meshing: &ObjectMeshConfig,
+    (rays, meshing): (&[RaySamplerConfig], &ObjectMeshConfig),
+    (caches, prior): (&mut Vec<MemberHiddenCache>, MemberPrior),
 ) -> Vec<MemberRays> {
     let mut work: Vec<_> = members
         .iter_mut()
         .filter(|(_, _, slot, ..)| active.binary_search(&slot.field).is_ok())
         .collect();
+    work.sort_by_key(|(_, field_slot, ..)| field_slot.index);
+    let mut shared = Vec::new();
+    if prior.solid_rays > 0 {
+        let cells: Vec<MemberCells> = work
+            .iter()
+            .map(|(keyframes, _, slot, _, bounds, _)| MemberCells {
+                field: slot.field,
+                member: slot.member,
+                fitted_box: bounds.oriented_box,
+                sight: MemberSight {
+                    views: views_of(keyframes),
+                    nocs: slot.0.nocs,
+                },
+            })
+            .collect();
+        let slots: Vec<usize> = work.iter().map(|(_, field_slot, ..)| field_slot.index).collect();
+        let hidden = rays.first().map(|r| r.hidden_cells).unwrap_or_default();
+        let caches = caches_of(caches, &slots);
+        shared = hidden_in_every_member_of_fields(&cells, caches, hidden, prior.min_share);
+    }
+    shared.resize(work.len(), None);
     work.par_iter_mut()
-        .map(|(keyframes, field_slot, slot, _, rng)| MemberRays {
+        .zip(shared)
+        .map(|((keyframes, field_slot, slot, _, _, rng), shared)| MemberRays {
             place: slot.0,
             origin: field_slot.origin,
-            rays: sample_window_rays(
+            rays: sample_member_rays(
                 &keyframes.0,
                 &field_slot.origin,
-                Some(&meshing.meshed_box(&slot.0.nocs.oriented_box())),
-                None,
-                None,
-                &rays[slot.field],
+                &meshing.meshed_box(&slot.0.nocs.oriented_box()),
+                shared,
+                (&rays[slot.field], prior.solid_rays),
                 &mut rng.0,
             ),
         })
         .collect()
+}
+
+/// The caches of the object fields `slots` (ascending), grown to hold them.
+fn caches_of<'c>(caches: &'c mut Vec<MemberHiddenCache>, slots: &[usize]) -> Vec<&'c mut MemberHiddenCache> {
+    if let Some(&last) = slots.last()
+        && caches.len() <= last
+    {
+        caches.resize_with(last + 1, MemberHiddenCache::default);
+    }
+    caches
+        .iter_mut()
+        .enumerate()
+        .filter(|(i, _)| slots.binary_search(i).is_ok())
+        .map(|(_, cache)| cache)
+        .collect()
+}
+
+/// The members' solid prior: rays per member and step, and the share of its box the cells no
+/// member saw into must make up.
+#[derive(Debug, Clone, Copy)]
+struct MemberPrior {
+    solid_rays: usize,
+    min_share: f64,
+}
+
+/// A member's keyframe crops.
+fn views_of(keyframes: &Keyframes) -> Vec<&ObjectView> {
+    keyframes.0.slots().iter().map(|s| &s.data).collect()
 }
