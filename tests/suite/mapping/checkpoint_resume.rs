@@ -1,7 +1,7 @@
 //! Checkpoints: a mapper saved, dropped and restored four times — after the first frame, mid-stream,
 //! during the training after the stream, during the category phase — ends with the same final
 //! meshes, categories and map as a run that was never interrupted (bit for bit), the solid and
-//! support priors on; and a run with per-frame instance ids, whose association memory is part of
+//! support priors on, the category members' too; and a run with per-frame instance ids, whose association memory is part of
 //! the checkpoint, restored mid-stream.
 
 use std::ops::ControlFlow;
@@ -53,6 +53,10 @@ fn config() -> MapperConfig {
     config.fields.object_rays.hidden_solid_rays = Some(4);
     config.fields.object_rays.below_support_rays = Some(2);
     config.fields.object_rays.seen_free_rays = Some(2);
+    // The members' solid prior (off under `paper` unless set), for every member with a cell no
+    // member saw into: its cells are not checkpointed either.
+    config.category_fields.hidden_solid_rays = Some(4);
+    config.category_fields.min_hidden_share = 0.0;
     config
 }
 
