@@ -115,18 +115,24 @@ pub fn hidden_in_every_member_of_fields<'c>(
         .collect()
 }
 
-/// What the shared cells are computed from besides the member's own space: its normalised
-/// frame, and each other member's frames and normalised frame.
-type SharedKey = (NocsFrame, Vec<(Vec<FrameIndex>, NocsFrame)>);
+/// What the shared cells are computed from: the member's frames, fitted box, normalised frame
+/// and rules, and each other member's frames and normalised frame.
+type SharedKey = (
+    Vec<FrameIndex>,
+    OrientedBox,
+    NocsFrame,
+    CellRules,
+    Vec<(Vec<FrameIndex>, NocsFrame)>,
+);
 
-/// One member's cells hidden in every member, recomputed only when its own hidden space, its
-/// normalised frame or another member's keyframes or frame changed.
+/// One member's cells hidden in every member, recomputed only when its keyframes, box or
+/// normalised frame, or another member's keyframes or frame changed.
 #[derive(Debug, Clone, Default)]
 pub struct MemberHiddenCache {
     /// The member's own hidden space.
     own: HiddenSpaceCache,
-    /// What the shared cells were computed from (with the own space), and the cells.
-    shared: Option<(SharedKey, HiddenSpace, HiddenSpace)>,
+    /// What the shared cells were computed from, and the cells.
+    shared: Option<(SharedKey, HiddenSpace)>,
 }
 
 impl MemberHiddenCache {
@@ -142,23 +148,23 @@ impl MemberHiddenCache {
         rules: CellRules,
         min_share: f64,
     ) -> Option<&HiddenSpace> {
-        let own = self.own.current(views, fitted_box, None, rules);
+        let frames = |views: &[&ObjectView]| views.iter().map(|v| v.frame).collect();
         let key = (
+            frames(views),
+            *fitted_box,
             *own_nocs,
-            others
-                .iter()
-                .map(|o| (o.views.iter().map(|v| v.frame).collect(), o.nocs))
-                .collect(),
+            rules,
+            others.iter().map(|o| (frames(&o.views), o.nocs)).collect(),
         );
-        let fresh = self
+        if self
             .shared
             .as_ref()
-            .is_some_and(|(computed_for, from, _)| *computed_for == key && from == own);
-        if !fresh {
-            let shared = hidden_in_every_member(own, own_nocs, others);
-            self.shared = Some((key, own.clone(), shared));
+            .is_none_or(|(computed_for, _)| *computed_for != key)
+        {
+            let own = self.own.current(views, fitted_box, None, rules);
+            self.shared = Some((key, hidden_in_every_member(own, own_nocs, others)));
         }
-        let shared = &self.shared.as_ref().expect("computed above").2;
+        let shared = &self.shared.as_ref().expect("computed above").1;
         (shared.hidden_share() >= min_share && !shared.centres.is_empty()).then_some(shared)
     }
 }

@@ -11,6 +11,7 @@ use catmap::categories::member_hidden::{
 };
 use catmap::field::{RaySamplerConfig, sample_member_rays};
 use catmap::meshing::ObjectMeshConfig;
+use catmap::objects::hidden_space::HiddenCells;
 use catmap::objects::object_view::ObjectView;
 use rayon::prelude::*;
 
@@ -96,6 +97,7 @@ pub fn train_category_fields(
     let meshing = &config.meshes.object;
     let prior = MemberPrior {
         solid_rays: config.member_solid_rays(),
+        hidden: config.object_rays().hidden_cells,
         min_share: config.category_fields.min_hidden_share,
     };
     for _ in 0..pending {
@@ -141,9 +143,8 @@ fn sample_members(
             })
             .collect();
         let slots: Vec<usize> = work.iter().map(|(_, field_slot, ..)| field_slot.index).collect();
-        let hidden = rays.first().map(|r| r.hidden_cells).unwrap_or_default();
         let caches = caches_of(caches, &slots);
-        shared = hidden_in_every_member_of_fields(&cells, caches, hidden, prior.min_share);
+        shared = hidden_in_every_member_of_fields(&cells, caches, prior.hidden, prior.min_share);
     }
     shared.resize(work.len(), None);
     work.par_iter_mut()
@@ -178,11 +179,12 @@ fn caches_of<'c>(caches: &'c mut Vec<MemberHiddenCache>, slots: &[usize]) -> Vec
         .collect()
 }
 
-/// The members' solid prior: rays per member and step, and the share of its box the cells no
-/// member saw into must make up.
+/// The members' solid prior: rays per member and step, which hidden cells it takes, and the
+/// share of its box the cells no member saw into must make up.
 #[derive(Debug, Clone, Copy)]
 struct MemberPrior {
     solid_rays: usize,
+    hidden: HiddenCells,
     min_share: f64,
 }
 
