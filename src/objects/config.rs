@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::objects::border_votes::BorderVotes;
 use crate::objects::instance_association::AssociationConfig;
 
 /// Object entities built from instance masks.
@@ -51,6 +52,9 @@ pub struct ObjectConfig {
     /// wrong side teaches a field surface metres behind the object or carves its rim. 0 (the
     /// default): every pixel counts.
     pub mask_border_px: u32,
+    /// How the band's pixels are decided: `frames = 0` leaves them unsure; else the labels of
+    /// the last frames vote ([`crate::objects::border_votes`]).
+    pub border_votes: BorderVotes,
     /// Where object ids come from: the dataset's (consistent) ids, or per-frame masks associated
     /// into objects ([`crate::objects::instance_association`]).
     pub association: AssociationConfig,
@@ -114,6 +118,7 @@ impl Default for ObjectConfig {
             bleed_depth_m: 0.1,
             bleed_depth_per_m: 0.0,
             mask_border_px: 0,
+            border_votes: BorderVotes::default(),
             association: AssociationConfig::default(),
         }
     }

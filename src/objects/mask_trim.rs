@@ -58,12 +58,24 @@ pub fn trim_bleeding_masks(frame: &RgbdFrame, cfg: &ObjectConfig) -> Option<Rgbd
     Some(out)
 }
 
-/// `frame` with every pixel within `radius_px` pixels (a square window) of a border between two
-/// labels, one of them an object's, [`InstanceLabel::Unsure`]; `None` when `radius_px` is 0 or
-/// the frame has no such border. A border pixel is one whose right or lower neighbour has another
-/// label, and that neighbour; the band grows from them by `radius_px − 1` pixels, so a mask that
-/// is `radius_px` pixels too large or too small has all its wrong pixels unsure.
+/// `frame` with every pixel of its [`border_band`] of `radius_px` [`InstanceLabel::Unsure`];
+/// `None` when the band is empty.
+#[cfg(test)]
 pub fn mark_unsure_borders(frame: &RgbdFrame, radius_px: u32) -> Option<RgbdFrame> {
+    let band = border_band(frame, radius_px)?;
+    let mut out = frame.clone();
+    for (i, _) in band.iter().enumerate().filter(|&(_, &b)| b) {
+        out.instances.set(i, InstanceLabel::Unsure);
+    }
+    Some(out)
+}
+
+/// The pixels within `radius_px` pixels (a square window) of a border between two labels, one of
+/// them an object's; `None` when `radius_px` is 0 or the frame has no such border. A border pixel
+/// is one whose right or lower neighbour has another label, and that neighbour; the band grows
+/// from them by `radius_px − 1` pixels, so a mask that is `radius_px` pixels too large or too
+/// small has all its wrong pixels in it.
+pub fn border_band(frame: &RgbdFrame, radius_px: u32) -> Option<Vec<bool>> {
     if radius_px == 0 {
         return None;
     }
@@ -99,16 +111,13 @@ pub fn mark_unsure_borders(frame: &RgbdFrame, radius_px: u32) -> Option<RgbdFram
             rows[v * w + u] = row[u.saturating_sub(grow)..(u + grow + 1).min(w)].contains(&true);
         }
     }
-    let mut out = frame.clone();
+    let mut band = vec![false; w * h];
     for u in 0..w {
         for v in 0..h {
-            let near = (v.saturating_sub(grow)..(v + grow + 1).min(h)).any(|y| rows[y * w + u]);
-            if near {
-                out.instances.set(v * w + u, InstanceLabel::Unsure);
-            }
+            band[v * w + u] = (v.saturating_sub(grow)..(v + grow + 1).min(h)).any(|y| rows[y * w + u]);
         }
     }
-    Some(out)
+    Some(band)
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! What the map keeps of one object (METHOD.md §1): what each frame says about it, its keyframes
 //! and the crops it keeps of them, its observed point cloud and its oriented box.
 
+pub mod border_votes;
 pub mod cell_evidence;
 pub mod config;
 pub mod frame_observation;

@@ -7,12 +7,13 @@ use std::collections::BTreeMap;
 use nalgebra::Point3;
 
 use crate::ids::ObjectId;
+use crate::objects::border_votes::{LabelHistory, vote_on_band};
 use crate::objects::config::ObjectConfig;
 use crate::objects::frame_observation::{FrameObservation, observe_objects};
 use crate::objects::instance_association::{
     AssociationConfig, InstanceSource, InstanceTracker, MaskEvidence, MaskFate,
 };
-use crate::objects::mask_trim::{mark_unsure_borders, trim_bleeding_masks};
+use crate::objects::mask_trim::{border_band, trim_bleeding_masks};
 use crate::sensor::frame::{InstanceLabel, InstanceMask, RgbdFrame};
 
 /// The masks of `frame` as the association sees them: every mask of `observation`, its majority
@@ -43,37 +44,78 @@ pub fn associate_frame(
     observation: &FrameObservation,
     cfg: &ObjectConfig,
 ) -> (RgbdFrame, FrameObservation) {
-    let fates = tracker.associate(
-        frame.index,
-        &mask_evidence(frame, observation, &cfg.association),
-        &cfg.association,
-    );
+    let fates = associate_masks(tracker, frame, observation, cfg);
     let relabelled = relabel_instances(frame, &fates);
     let observation = observe_objects(&relabelled, cfg);
     (relabelled, observation)
 }
 
+/// What `tracker` makes of the masks of `frame` (`observation` its masks grouped).
+fn associate_masks(
+    tracker: &mut InstanceTracker,
+    frame: &RgbdFrame,
+    observation: &FrameObservation,
+    cfg: &ObjectConfig,
+) -> BTreeMap<ObjectId, MaskFate> {
+    tracker.associate(
+        frame.index,
+        &mask_evidence(frame, observation, &cfg.association),
+        &cfg.association,
+    )
+}
+
 /// The segment stage's work on one frame: bleeding mask pixels trimmed (`bleed_radius_px`),
-/// masks' borders made unsure (`mask_border_px`), the pixels grouped by object, and, with
-/// per-frame ids, the masks associated into objects by `tracker`. Returns the frame when it
-/// changed, and its observation.
+/// masks' borders made unsure (`mask_border_px`) or, with `border_votes.frames`, decided by the
+/// last frames' labels kept in `history` ([`crate::objects::border_votes`]), the pixels grouped by
+/// object, and, with per-frame ids, the masks associated into objects by `tracker` (from the
+/// masks without their band). Returns the frame when it changed, and its observation.
 pub fn segment_frame(
     frame: &RgbdFrame,
     cfg: &ObjectConfig,
     tracker: &mut InstanceTracker,
+    history: &mut LabelHistory,
 ) -> (Option<RgbdFrame>, FrameObservation) {
     let trimmed = trim_bleeding_masks(frame, cfg);
-    let bordered = mark_unsure_borders(trimmed.as_ref().unwrap_or(frame), cfg.mask_border_px);
-    let changed = bordered.or(trimmed);
-    let frame_now = changed.as_ref().unwrap_or(frame);
-    let observation = observe_objects(frame_now, cfg);
-    match cfg.association.instances {
-        InstanceSource::Consistent => (changed, observation),
-        InstanceSource::PerFrame => {
-            let (relabelled, observation) = associate_frame(tracker, frame_now, &observation, cfg);
-            (Some(relabelled), observation)
-        }
+    let base = trimmed.as_ref().unwrap_or(frame);
+    let band = border_band(base, cfg.mask_border_px);
+    if cfg.border_votes.frames == 0 {
+        let bordered = band.map(|band| with_band_unsure(base, &band));
+        let changed = bordered.or(trimmed);
+        let frame_now = changed.as_ref().unwrap_or(frame);
+        let observation = observe_objects(frame_now, cfg);
+        return match cfg.association.instances {
+            InstanceSource::Consistent => (changed, observation),
+            InstanceSource::PerFrame => {
+                let (relabelled, observation) = associate_frame(tracker, frame_now, &observation, cfg);
+                (Some(relabelled), observation)
+            }
+        };
     }
+    let labelled = match cfg.association.instances {
+        InstanceSource::Consistent => base.clone(),
+        InstanceSource::PerFrame => {
+            let bordered = band.as_ref().map(|band| with_band_unsure(base, band));
+            let judged = bordered.as_ref().unwrap_or(base);
+            let fates = associate_masks(tracker, judged, &observe_objects(judged, cfg), cfg);
+            relabel_instances(base, &fates)
+        }
+    };
+    let decided = match &band {
+        Some(band) => vote_on_band(&labelled, band, history, &cfg.border_votes),
+        None => labelled.clone(),
+    };
+    history.push(&labelled, &labelled.instances, cfg.border_votes.frames);
+    let observation = observe_objects(&decided, cfg);
+    (Some(decided), observation)
+}
+
+/// `frame` with the pixels of `band` unsure.
+fn with_band_unsure(frame: &RgbdFrame, band: &[bool]) -> RgbdFrame {
+    let mut out = frame.clone();
+    for (i, _) in band.iter().enumerate().filter(|&(_, &b)| b) {
+        out.instances.set(i, InstanceLabel::Unsure);
+    }
+    out
 }
 
 /// `frame` with its masks renamed as `fates` says: a mask that shows an object gets its id; a

@@ -94,7 +94,7 @@ pub enum InstanceLabel {
 /// Per-pixel instance labels of one frame.
 ///
 /// Stored compactly as `u32` codes; read them through [`InstanceMask::label`].
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct InstanceMask {
     codes: Vec<u32>,
 }

@@ -23,8 +23,8 @@ use crate::components::{
 };
 use crate::resources::CategoryFields;
 use crate::resources::{
-    Association, CategoryIndex, Fields, ObjectIndex, Settings, StageTimes, StreamProgress, TrainingQueue,
-    TrainingSchedule,
+    Association, BorderHistory, CategoryIndex, Fields, ObjectIndex, Settings, StageTimes, StreamProgress,
+    TrainingQueue, TrainingSchedule,
 };
 use crate::run_state::PhaseProgress;
 
@@ -79,6 +79,9 @@ pub(crate) struct MapperState {
     /// The association of per-frame masks (empty with consistent ids).
     #[serde(default)]
     association: Association,
+    /// The last frames' mask labels for the border votes (empty when they are off).
+    #[serde(default)]
+    border_history: BorderHistory,
     queue: TrainingQueue,
     schedule: TrainingSchedule,
     phases: PhaseProgress,
@@ -166,6 +169,7 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
         config: world.resource::<Settings>().0.clone(),
         progress: world.resource::<StreamProgress>().clone(),
         association: world.resource::<Association>().clone(),
+        border_history: world.resource::<BorderHistory>().clone(),
         queue: *world.resource::<TrainingQueue>(),
         schedule: world.resource::<TrainingSchedule>().clone(),
         phases: *world.resource::<PhaseProgress>(),
@@ -385,6 +389,7 @@ pub(crate) fn restore(
     world.insert_resource(CategoryIndex(categories));
     world.insert_resource(state.progress);
     world.insert_resource(state.association);
+    world.insert_resource(state.border_history);
     world.insert_resource(state.queue);
     world.insert_resource(state.schedule);
     world.insert_resource(state.phases);

@@ -19,8 +19,8 @@ use crate::components::{
 use crate::recording::Rerun;
 use crate::resources::CategoryFields;
 use crate::resources::{
-    Association, CategoryIndex, DatasetClasses, Fields, FinalMeshes, FrameInbox, ObjectIndex, Settings, SmallInstances,
-    StageTimes, StreamProgress, TrainingQueue, TrainingSchedule,
+    Association, BorderHistory, CategoryIndex, DatasetClasses, Fields, FinalMeshes, FrameInbox, ObjectIndex, Settings,
+    SmallInstances, StageTimes, StreamProgress, TrainingQueue, TrainingSchedule,
 };
 use crate::run_state::{CurrentPhase, LiveTicks, PhaseProgress, TickRecord};
 use crate::schedule::build_schedule;
@@ -95,6 +95,7 @@ impl Mapper {
         world.init_resource::<ObjectIndex>();
         world.init_resource::<DatasetClasses>();
         world.init_resource::<Association>();
+        world.init_resource::<BorderHistory>();
         world.init_resource::<CategoryIndex>();
         world.init_resource::<StageTimes>();
         world.init_resource::<SmallInstances>();

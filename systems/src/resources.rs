@@ -33,6 +33,11 @@ impl Default for DatasetClasses {
 #[derive(Resource, Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Association(pub catmap::objects::instance_association::InstanceTracker);
 
+/// The last frames' mask labels, which decide the pixels of the next frames' mask borders
+/// (`objects.border_votes`; empty when it is off).
+#[derive(Resource, Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BorderHistory(pub catmap::objects::border_votes::LabelHistory);
+
 /// The receiving end of the frame stream.
 #[derive(Resource, Debug)]
 pub struct FrameInbox(pub Receiver<StreamMessage>);

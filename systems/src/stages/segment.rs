@@ -5,14 +5,16 @@ use catmap::objects::instance_association::InstanceSource;
 use catmap::objects::segment::segment_frame;
 
 use crate::components::{CameraFrame, FrameObservations};
-use crate::resources::{Association, Settings, SmallInstances, StageTimes};
+use crate::resources::{Association, BorderHistory, Settings, SmallInstances, StageTimes};
 
 /// Groups each new frame's pixels by object (boxes, class votes, pixel lists), after trimming
 /// masks that bleed past their object and, with per-frame instance ids, associating the masks
-/// into objects (frames in index order); a changed frame replaces the entity's.
+/// into objects, and with border votes deciding the masks' borders by the frames before (frames
+/// in index order for both); a changed frame replaces the entity's.
 pub fn observe_frames(
     settings: Res<Settings>,
     mut tracker: ResMut<Association>,
+    mut history: ResMut<BorderHistory>,
     mut frames: Query<(Entity, &mut CameraFrame), Added<CameraFrame>>,
     mut times: ResMut<StageTimes>,
     mut small: ResMut<SmallInstances>,
@@ -20,11 +22,13 @@ pub fn observe_frames(
 ) {
     let _timer = times.start("masks");
     let mut batch: Vec<_> = frames.iter_mut().collect();
-    if settings.0.objects.association.instances == InstanceSource::PerFrame {
+    if settings.0.objects.association.instances == InstanceSource::PerFrame
+        || settings.0.objects.border_votes.frames > 0
+    {
         batch.sort_by_key(|(_, frame)| frame.0.index);
     }
     for (entity, mut frame) in batch {
-        let (changed, observation) = segment_frame(&frame.0, &settings.0.objects, &mut tracker.0);
+        let (changed, observation) = segment_frame(&frame.0, &settings.0.objects, &mut tracker.0, &mut history.0);
         if let Some(changed) = changed {
             frame.0 = std::sync::Arc::new(changed);
         }
