@@ -12,6 +12,10 @@
 //!   second object of the class overlaps it by at least `ambiguity_ratio` × that (and
 //!   `min_overlap`): the mask spans two objects (a segmenter's merge) and is held back;
 //! - several masks may go to one object (a split object);
+//! - a mask no object of its class takes but that an object of **another class** overlaps by at
+//!   least `confused_class_overlap` shows that object under a confused class (a segmenter's
+//!   occasional wrong class): it is held back and starts no candidate, so a few confused masks of
+//!   one chair never make a second object on it;
 //! - a mask no object takes goes to the **candidate** of its class it overlaps most (at least
 //!   `min_overlap`), else starts a new candidate. A candidate seen in `min_frames` frames becomes an
 //!   object with the next free id (1, 2, …); one not seen for `candidate_window_frames` frames is
@@ -57,6 +61,10 @@ pub struct AssociationConfig {
     pub min_frames: u32,
     /// A candidate not seen for this many frames is forgotten.
     pub candidate_window_frames: u64,
+    /// A mask no object of its class takes, overlapping an object of another class by at least
+    /// this share, is that object under a confused class and is held back (module doc); above 1
+    /// turns the check off.
+    pub confused_class_overlap: f32,
     /// Points drawn from each mask (evenly over its pixels with depth).
     pub max_points_per_mask: usize,
     /// A mask with fewer valid points is held back.
@@ -72,6 +80,7 @@ impl Default for AssociationConfig {
             ambiguity_ratio: 0.5,
             min_frames: 3,
             candidate_window_frames: 30,
+            confused_class_overlap: 0.5,
             max_points_per_mask: 400,
             min_points: 20,
         }
@@ -98,6 +107,8 @@ pub enum HoldReason {
     Ambiguous,
     /// Too few of its pixels have depth.
     TooFewPoints,
+    /// It shows an object of another class (its class confused).
+    ConfusedClass,
 }
 
 /// What became of a mask.
@@ -230,6 +241,13 @@ impl InstanceTracker {
                 match best(&mut overlaps, cfg) {
                     Some((_, true)) => Decision::Fate(MaskFate::Held(HoldReason::Ambiguous)),
                     Some((id, false)) => Decision::Fate(MaskFate::Object(id)),
+                    None if self
+                        .objects
+                        .values()
+                        .any(|f| f.class != m.class && f.overlap(&m.points, v) >= cfg.confused_class_overlap) =>
+                    {
+                        Decision::Fate(MaskFate::Held(HoldReason::ConfusedClass))
+                    }
                     None => {
                         let mut overlaps: Vec<(usize, f32)> = (self.candidates.iter().enumerate())
                             .filter(|(_, c)| c.footprint.class == m.class)

@@ -166,9 +166,52 @@ fn a_split_object_keeps_one_id_and_another_class_is_not_taken() {
     assert_eq!(object_of(&fates, 5), Some(chair), "the right half too");
     assert_eq!(
         fates[&ObjectId(9)],
-        MaskFate::Held(HoldReason::Candidate),
-        "a table mask never joins a chair"
+        MaskFate::Held(HoldReason::ConfusedClass),
+        "a table mask never joins a chair: it is chair B under a confused class"
     );
+    assert_eq!(tracker.candidate_count(), 0, "and starts no candidate");
+}
+
+#[test]
+fn a_chair_confused_for_a_table_in_several_frames_makes_no_table_on_it() {
+    let cfg = AssociationConfig::default();
+    let mut tracker = InstanceTracker::default();
+    for t in 0..3u64 {
+        tracker.associate(FrameIndex(t), &three_objects(t, [1, 2, 3]), &cfg);
+    }
+    let (b_lo, b_hi) = chair_at(1.5);
+    for t in 3..8u64 {
+        let mut masks = three_objects(t, [4, 5, 6]);
+        masks[1] = mask(5, TABLE, seen_face(b_lo, b_hi, 0.01 * (t % 3) as f32));
+        let fates = tracker.associate(FrameIndex(t), &masks, &cfg);
+        assert_eq!(fates[&ObjectId(5)], MaskFate::Held(HoldReason::ConfusedClass), "frame {t}");
+    }
+    assert_eq!(tracker.object_count(), 3, "the three objects, no table on chair B");
+    // Off (a share above 1), the confused masks make a table on chair B after three frames.
+    let off = AssociationConfig {
+        confused_class_overlap: 1.1,
+        ..cfg.clone()
+    };
+    let mut tracker = InstanceTracker::default();
+    for t in 0..3u64 {
+        tracker.associate(FrameIndex(t), &three_objects(t, [1, 2, 3]), &off);
+    }
+    for t in 3..6u64 {
+        let mut masks = three_objects(t, [4, 5, 6]);
+        masks[1] = mask(5, TABLE, seen_face(b_lo, b_hi, 0.0));
+        tracker.associate(FrameIndex(t), &masks, &off);
+    }
+    assert_eq!(tracker.object_count(), 4);
+    // A table's mask beside the chairs, far from every object, is a new object's as before.
+    let mut tracker = InstanceTracker::default();
+    for t in 0..3u64 {
+        tracker.associate(
+            FrameIndex(t),
+            &[mask(1, TABLE, seen_face([6.0, 0.0, 0.0], [7.0, 0.8, 0.75], 0.0))],
+            &cfg,
+        );
+    }
+    assert_eq!(tracker.object_count(), 1);
 }
 
 #[test]
