@@ -96,13 +96,15 @@ impl MapperConfig {
     /// These settings for depth images like `depth`: a depth camera's are smoothed (the
     /// bilateral filter of [`crate::sensor::depth_smoothing`]) and its boxes fitted to the
     /// cloud voxels that hold at least 3 points (`objects.box_min_voxel_points`), which leaves
-    /// its stray points out; exact ones get neither. Measured in docs/ROBUSTNESS.md.
+    /// its stray points out, and the views' evidence allows for its noise
+    /// (`dataset.depth_noise_per_m2`); exact ones get none of it. Measured in docs/ROBUSTNESS.md.
     pub fn with_depth_images(mut self, depth: DepthImages) -> Self {
-        let (smoothing, box_min_voxel_points) = match depth {
-            DepthImages::Exact => (DepthSmoothing::None, 1),
-            DepthImages::Camera => (DepthSmoothing::Bilateral, 3),
+        let (smoothing, box_min_voxel_points, depth_noise_per_m2) = match depth {
+            DepthImages::Exact => (DepthSmoothing::None, 1, 0.0),
+            DepthImages::Camera => (DepthSmoothing::Bilateral, 3, 0.0025),
         };
         self.dataset.depth_smoothing = smoothing;
+        self.dataset.depth_noise_per_m2 = depth_noise_per_m2;
         self.objects.box_min_voxel_points = box_min_voxel_points;
         self
     }
@@ -242,6 +244,7 @@ mod tests {
     fn a_depth_cameras_images_are_smoothed_and_their_boxes_skip_lone_voxels() {
         let camera = MapperConfig::default().with_depth_images(DepthImages::Camera);
         assert_eq!(camera.dataset.depth_smoothing, DepthSmoothing::Bilateral);
+        assert_eq!(camera.dataset.depth_noise_per_m2, 0.0025, "the views allow for its noise");
         assert_eq!(camera.objects.box_min_voxel_points, 3);
         assert_eq!(camera.with_depth_images(DepthImages::Exact), MapperConfig::default());
     }

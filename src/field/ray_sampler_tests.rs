@@ -37,6 +37,7 @@ fn view(frame: u64, depth: f32) -> ObjectView {
         rgb: vec![[255, 0, 51]; 8],
         depth_m: vec![depth; 8],
         states: [states, states].concat(),
+        depth_noise_per_m2: 0.0,
     }
 }
 

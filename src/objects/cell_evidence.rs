@@ -19,6 +19,11 @@
 //!   (a room's far wall beyond a Kinect's 5 m) — **free**; on any other pixel without depth the
 //!   view says nothing.
 //!
+//! With a depth camera's noise allowance (`dataset.depth_noise_per_m2`, a × d²), `m` and the
+//! glimpse margin grow by a × d² on each view: one view's noisy pixel, a few centimetres deep,
+//! does not call a cell inside the object seen free (a storage box seen through a Kinect-like
+//! camera had 306 such cells, and its inside, open onto them, was drawn empty).
+//!
 //! Over all views a cell is, in this order of precedence: seen free (free in one view), occluded
 //! (behind another surface in one), surface, glimpsed, hidden (behind the object's surface in
 //! one), or unknown. Cells that project outside a crop, or onto a pixel without depth that is
@@ -162,12 +167,12 @@ pub(crate) fn view_evidence(view: &ObjectView, p_world: &Point3<f32>, margin_m: 
         } else {
             ViewEvidence::Nothing
         }
-    } else if p_camera.z < d - margin_m {
+    } else if p_camera.z < d - margin_m - view.depth_noise_m(d) {
         ViewEvidence::Free
-    } else if p_camera.z <= d + margin_m {
+    } else if p_camera.z <= d + margin_m + view.depth_noise_m(d) {
         match view.states[i] {
             PixelState::ThisObject => ViewEvidence::AtObjectSurface,
-            _ if p_camera.z < d - GLIMPSE_MARGIN_M => ViewEvidence::Glimpsed,
+            _ if p_camera.z < d - GLIMPSE_MARGIN_M - view.depth_noise_m(d) => ViewEvidence::Glimpsed,
             _ => ViewEvidence::Nothing,
         }
     } else {
@@ -223,5 +228,59 @@ pub fn cell_evidence(views: &[&ObjectView], p_world: &Point3<f32>, margin_m: f32
         CellEvidence::Hidden
     } else {
         CellEvidence::Unknown
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Isometry3;
+
+    use super::*;
+    use crate::ids::FrameIndex;
+    use crate::sensor::frame::CameraIntrinsics;
+    use crate::sensor::pixel_box::PixelBox;
+
+    /// A 3×3 view from the origin along +z whose every pixel measured the object at `depth_m`.
+    fn view(depth_m: f32, depth_noise_per_m2: f32) -> ObjectView {
+        ObjectView {
+            frame: FrameIndex(0),
+            world_from_camera: Isometry3::identity(),
+            intrinsics: CameraIntrinsics {
+                width: 3,
+                height: 3,
+                fx: 1.0,
+                fy: 1.0,
+                cx: 1.0,
+                cy: 1.0,
+            },
+            region: PixelBox {
+                u_min: 0,
+                v_min: 0,
+                u_max: 2,
+                v_max: 2,
+            },
+            rgb: vec![[0; 3]; 9],
+            depth_m: vec![depth_m; 9],
+            states: vec![PixelState::ThisObject; 9],
+            depth_noise_per_m2,
+        }
+    }
+
+    #[test]
+    fn a_noisy_depth_a_few_centimetres_deep_does_not_see_the_objects_inside_free_with_the_allowance() {
+        // The surface is at 3.00 m; this view measured 3.05 m (noise). A point 2 cm inside.
+        let inside = Point3::new(0.0, 0.0, 3.02);
+        assert_eq!(view_evidence(&view(3.05, 0.0), &inside, 0.01), ViewEvidence::Free, "exact depth trusted");
+        assert_eq!(
+            view_evidence(&view(3.05, 0.005), &inside, 0.01),
+            ViewEvidence::AtObjectSurface,
+            "4.6 cm allowed at 3.05 m"
+        );
+        // Space well before the surface is still seen free, and well behind it behind.
+        assert_eq!(view_evidence(&view(3.05, 0.005), &Point3::new(0.0, 0.0, 2.9), 0.01), ViewEvidence::Free);
+        assert_eq!(
+            view_evidence(&view(3.05, 0.005), &Point3::new(0.0, 0.0, 3.2), 0.01),
+            ViewEvidence::BehindObject
+        );
     }
 }

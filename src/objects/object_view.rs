@@ -99,6 +99,9 @@ pub struct ObjectView {
     pub depth_m: Vec<f32>,
     /// State of each pixel of the region, row-major.
     pub states: Vec<PixelState>,
+    /// How far a measured depth d may stray: this × d² metres (`dataset.depth_noise_per_m2`).
+    #[serde(default)]
+    pub depth_noise_per_m2: f32,
 }
 
 impl ObjectView {
@@ -128,7 +131,21 @@ impl ObjectView {
             rgb,
             depth_m,
             states,
+            depth_noise_per_m2: 0.0,
         }
+    }
+
+    /// The crop with its depth's noise allowance set (`dataset.depth_noise_per_m2`).
+    pub fn with_depth_noise(self, depth_noise_per_m2: f32) -> Self {
+        Self {
+            depth_noise_per_m2,
+            ..self
+        }
+    }
+
+    /// How far the depth `d` measured by this view may stray from the surface, metres.
+    pub fn depth_noise_m(&self, d: f32) -> f32 {
+        self.depth_noise_per_m2 * d * d
     }
 
     /// Index into the crop's arrays of full-frame pixel `(u, v)`, if inside the region.

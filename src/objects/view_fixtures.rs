@@ -69,6 +69,7 @@ pub(crate) fn render_pitched(eye: [f32; 3], yaw: f32, pitch: f32, scene: &[Solid
         rgb: vec![[0; 3]; depth_m.len()],
         depth_m,
         states,
+        depth_noise_per_m2: 0.0,
     }
 }
 

@@ -100,9 +100,10 @@ pub struct RunArgs {
     pub masks: Option<MasksArg>,
     /// The depth images: exact (rendered, Replica's) or a depth camera's (noise growing with
     /// distance, stray points): `camera` smooths each depth image with an edge-preserving
-    /// bilateral filter before use and fits boxes to cloud voxels holding at least 3 points
-    /// [default: the config's `dataset.depth_smoothing` and `objects.box_min_voxel_points`,
-    /// exact]
+    /// bilateral filter before use, fits boxes to cloud voxels holding at least 3 points and
+    /// allows for the noise in what a view says of a point [default: the config's
+    /// `dataset.depth_smoothing`, `objects.box_min_voxel_points` and
+    /// `dataset.depth_noise_per_m2`, exact]
     #[arg(long, value_enum)]
     pub depth: Option<DepthArg>,
     /// Continue the interrupted run whose output folder is DIR (from `DIR/checkpoint`), with the
@@ -134,7 +135,7 @@ pub enum MasksArg {
 pub enum DepthArg {
     /// Exact depth, used as read.
     Exact,
-    /// A depth camera's depth, smoothed (bilateral filter).
+    /// A depth camera's depth, smoothed (bilateral filter), its noise allowed for.
     Camera,
 }
 

@@ -84,7 +84,8 @@ pub fn record_object_views(
                 class.set_if_neq(ObjectClass(majority));
             }
             visible.0 += 1;
-            let view = ObjectView::crop(&frame.0, observation.sample_box, ViewOwner::Object(*id));
+            let view = ObjectView::crop(&frame.0, observation.sample_box, ViewOwner::Object(*id))
+                .with_depth_noise(settings.0.dataset.depth_noise_per_m2);
             let keyframes_cfg = &settings.0.keyframes;
             let admission = keyframes
                 .0

@@ -113,6 +113,7 @@ fn half_seen_views() -> Vec<ObjectView> {
                 rgb: vec![[200, 80, 50]; depth_m.len()],
                 depth_m,
                 states,
+                depth_noise_per_m2: 0.0,
             }
         })
         .collect()
