@@ -244,7 +244,10 @@ mod tests {
     fn a_depth_cameras_images_are_smoothed_and_their_boxes_skip_lone_voxels() {
         let camera = MapperConfig::default().with_depth_images(DepthImages::Camera);
         assert_eq!(camera.dataset.depth_smoothing, DepthSmoothing::Bilateral);
-        assert_eq!(camera.dataset.depth_noise_per_m2, 0.0025, "the views allow for its noise");
+        assert_eq!(
+            camera.dataset.depth_noise_per_m2, 0.0025,
+            "the views allow for its noise"
+        );
         assert_eq!(camera.objects.box_min_voxel_points, 3);
         assert_eq!(camera.with_depth_images(DepthImages::Exact), MapperConfig::default());
     }

@@ -270,14 +270,21 @@ mod tests {
     fn a_noisy_depth_a_few_centimetres_deep_does_not_see_the_objects_inside_free_with_the_allowance() {
         // The surface is at 3.00 m; this view measured 3.05 m (noise). A point 2 cm inside.
         let inside = Point3::new(0.0, 0.0, 3.02);
-        assert_eq!(view_evidence(&view(3.05, 0.0), &inside, 0.01), ViewEvidence::Free, "exact depth trusted");
+        assert_eq!(
+            view_evidence(&view(3.05, 0.0), &inside, 0.01),
+            ViewEvidence::Free,
+            "exact depth trusted"
+        );
         assert_eq!(
             view_evidence(&view(3.05, 0.005), &inside, 0.01),
             ViewEvidence::AtObjectSurface,
             "4.6 cm allowed at 3.05 m"
         );
         // Space well before the surface is still seen free, and well behind it behind.
-        assert_eq!(view_evidence(&view(3.05, 0.005), &Point3::new(0.0, 0.0, 2.9), 0.01), ViewEvidence::Free);
+        assert_eq!(
+            view_evidence(&view(3.05, 0.005), &Point3::new(0.0, 0.0, 2.9), 0.01),
+            ViewEvidence::Free
+        );
         assert_eq!(
             view_evidence(&view(3.05, 0.005), &Point3::new(0.0, 0.0, 3.2), 0.01),
             ViewEvidence::BehindObject

@@ -184,7 +184,11 @@ fn a_chair_confused_for_a_table_in_several_frames_makes_no_table_on_it() {
         let mut masks = three_objects(t, [4, 5, 6]);
         masks[1] = mask(5, TABLE, seen_face(b_lo, b_hi, 0.01 * (t % 3) as f32));
         let fates = tracker.associate(FrameIndex(t), &masks, &cfg);
-        assert_eq!(fates[&ObjectId(5)], MaskFate::Held(HoldReason::ConfusedClass), "frame {t}");
+        assert_eq!(
+            fates[&ObjectId(5)],
+            MaskFate::Held(HoldReason::ConfusedClass),
+            "frame {t}"
+        );
     }
     assert_eq!(tracker.object_count(), 3, "the three objects, no table on chair B");
     // Off (a share above 1), the confused masks make a table on chair B after three frames.

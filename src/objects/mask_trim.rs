@@ -62,12 +62,16 @@ pub fn trim_bleeding_masks(frame: &RgbdFrame, cfg: &ObjectConfig) -> Option<Rgbd
 /// `None` when the band is empty.
 #[cfg(test)]
 pub fn mark_unsure_borders(frame: &RgbdFrame, radius_px: u32) -> Option<RgbdFrame> {
-    let band = border_band(frame, radius_px)?;
+    border_band(frame, radius_px).map(|band| with_band_unsure(frame, &band))
+}
+
+/// `frame` with the pixels of `band` [`InstanceLabel::Unsure`].
+pub fn with_band_unsure(frame: &RgbdFrame, band: &[bool]) -> RgbdFrame {
     let mut out = frame.clone();
     for (i, _) in band.iter().enumerate().filter(|&(_, &b)| b) {
         out.instances.set(i, InstanceLabel::Unsure);
     }
-    Some(out)
+    out
 }
 
 /// The pixels within `radius_px` pixels (a square window) of a border between two labels, one of

@@ -13,7 +13,7 @@ use crate::objects::frame_observation::{FrameObservation, observe_objects};
 use crate::objects::instance_association::{
     AssociationConfig, InstanceSource, InstanceTracker, MaskEvidence, MaskFate,
 };
-use crate::objects::mask_trim::{border_band, trim_bleeding_masks};
+use crate::objects::mask_trim::{border_band, trim_bleeding_masks, with_band_unsure};
 use crate::sensor::frame::{InstanceLabel, InstanceMask, RgbdFrame};
 
 /// The masks of `frame` as the association sees them: every mask of `observation`, its majority
@@ -78,44 +78,28 @@ pub fn segment_frame(
     let trimmed = trim_bleeding_masks(frame, cfg);
     let base = trimmed.as_ref().unwrap_or(frame);
     let band = border_band(base, cfg.mask_border_px);
-    if cfg.border_votes.frames == 0 {
-        let bordered = band.map(|band| with_band_unsure(base, &band));
-        let changed = bordered.or(trimmed);
-        let frame_now = changed.as_ref().unwrap_or(frame);
-        let observation = observe_objects(frame_now, cfg);
-        return match cfg.association.instances {
-            InstanceSource::Consistent => (changed, observation),
-            InstanceSource::PerFrame => {
-                let (relabelled, observation) = associate_frame(tracker, frame_now, &observation, cfg);
-                (Some(relabelled), observation)
-            }
-        };
-    }
+    // With per-frame ids, the masks without their band are associated, and the frame before the
+    // band relabelled.
     let labelled = match cfg.association.instances {
-        InstanceSource::Consistent => base.clone(),
+        InstanceSource::Consistent => None,
         InstanceSource::PerFrame => {
             let bordered = band.as_ref().map(|band| with_band_unsure(base, band));
             let judged = bordered.as_ref().unwrap_or(base);
             let fates = associate_masks(tracker, judged, &observe_objects(judged, cfg), cfg);
-            relabel_instances(base, &fates)
+            Some(relabel_instances(base, &fates))
         }
     };
-    let decided = match &band {
-        Some(band) => vote_on_band(&labelled, band, history, &cfg.border_votes),
-        None => labelled.clone(),
-    };
-    history.push(&labelled, &labelled.instances, cfg.border_votes.frames);
-    let observation = observe_objects(&decided, cfg);
-    (Some(decided), observation)
-}
-
-/// `frame` with the pixels of `band` unsure.
-fn with_band_unsure(frame: &RgbdFrame, band: &[bool]) -> RgbdFrame {
-    let mut out = frame.clone();
-    for (i, _) in band.iter().enumerate().filter(|&(_, &b)| b) {
-        out.instances.set(i, InstanceLabel::Unsure);
+    let raw = labelled.as_ref().unwrap_or(base);
+    let decided = band.map(|band| match cfg.border_votes.frames {
+        0 => with_band_unsure(raw, &band),
+        _ => vote_on_band(raw, &band, history, &cfg.border_votes),
+    });
+    if cfg.border_votes.frames > 0 {
+        history.push(raw, &raw.instances, cfg.border_votes.frames);
     }
-    out
+    let changed = decided.or(labelled).or(trimmed);
+    let observation = observe_objects(changed.as_ref().unwrap_or(frame), cfg);
+    (changed, observation)
 }
 
 /// `frame` with its masks renamed as `fates` says: a mask that shows an object gets its id; a

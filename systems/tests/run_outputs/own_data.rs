@@ -106,7 +106,11 @@ fn the_readmes_own_data_walk_through_maps_a_tum_layout_sequence_with_per_frame_m
                 &config["objects"]["box_min_voxel_points"],
                 &config["dataset"]["depth_noise_per_m2"]
             ),
-            (&serde_json::json!("bilateral"), &serde_json::json!(3), &serde_json::json!(0.0025)),
+            (
+                &serde_json::json!("bilateral"),
+                &serde_json::json!(3),
+                &serde_json::json!(0.0025)
+            ),
             "--depth camera smooths the depth, leaves lone voxels out of the boxes and allows for its noise: {config}"
         );
     }
