@@ -15,6 +15,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::class_registration::{CategoryConfig, ClassRegistration, MemberInput, class_is_due, register_class};
+use super::subcategories::ReversePoints;
 use super::uncertainty::{ObjectReliability, UncertaintyStamp, UnobservedSpace, object_reliability, sphere_rays};
 use crate::error::Result;
 use crate::field::FieldBatch;
@@ -136,11 +137,18 @@ pub fn update_class(
 ) -> Result<ClassUpdate> {
     let started = Instant::now();
     let clouds: Vec<Vec<Point3<f32>>> = members.iter().map(|m| m.cloud.points()).collect();
+    // One member has no pair to register and no rank to take: nothing reads its space.
+    let looked: Vec<Option<ObservedSpace>> = members
+        .par_iter()
+        .zip(&clouds)
+        .map(|(member, cloud)| observed_space(member, cloud, cfg).filter(|_| members.len() > 1))
+        .collect();
     let reliabilities: Vec<Option<MemberReliability>> = if members.len() > 1 {
         members
             .par_iter()
             .zip(&clouds)
-            .map(|(member, cloud)| member_reliability(member, cloud, fields, cfg, seed))
+            .zip(&looked)
+            .map(|((member, cloud), space)| member_reliability(member, cloud, space.as_ref(), fields, cfg, seed))
             .collect()
     } else {
         vec![None]
@@ -151,12 +159,14 @@ pub fn update_class(
         .iter()
         .zip(clouds)
         .zip(&reliabilities)
-        .map(|((m, cloud), rel)| MemberInput {
+        .zip(looked)
+        .map(|(((m, cloud), rel), looked)| MemberInput {
             id: m.id,
             cloud,
             cloud_version: m.cloud.points_added(),
             bounds: m.bounds,
             reliable_rays: rel.as_ref().map_or(0, |r| r.sphere.reliable_rays),
+            looked: looked.filter(|_| cfg.subcategories.unplaced_reverse == ReversePoints::LookedAt),
         })
         .collect();
     let registration = register_class(&inputs, previous, cfg, class_registration_seed(seed, class))?;
@@ -175,11 +185,27 @@ pub fn update_class(
     })
 }
 
+/// What `member`'s views observed of the cube of its uncertainty sphere (around its observed
+/// `cloud`'s world-axis box), when its views are known and the sphere
+/// ([`UnobservedSpace::Unknown`]) or the reverse distance ([`ReversePoints::LookedAt`]) may read it.
+fn observed_space(member: &ClassMember<'_>, cloud: &[Point3<f32>], cfg: &CategoryConfig) -> Option<ObservedSpace> {
+    let read = cfg.uncertainty.unobserved == UnobservedSpace::Unknown
+        || cfg.subcategories.unplaced_reverse == ReversePoints::LookedAt;
+    let keyframes = member.keyframes.filter(|_| read)?;
+    let aabb = Aabb::from_points(cloud)?;
+    let (centre, half_extents) = (aabb.center(), aabb.extent() * 0.5);
+    let views: Vec<&ObjectView> = keyframes.slots().iter().map(|s| &s.data).collect();
+    let radius = sphere_rays(&centre, &half_extents, &cfg.uncertainty).radius;
+    Some(ObservedSpace::of_views(&views, &centre, radius))
+}
+
 /// A member's sphere: the stored one while it still describes the member, else evaluated on its
-/// field around its observed cloud's world-axis box (METHOD.md §3). `None` without a field.
+/// field around its observed cloud's world-axis box (METHOD.md §3), reading `observed` as
+/// [`UnobservedSpace`] says. `None` without a field.
 fn member_reliability(
     member: &ClassMember<'_>,
     cloud: &[Point3<f32>],
+    observed: Option<&ObservedSpace>,
     fields: &FieldBatch,
     cfg: &CategoryConfig,
     seed: u64,
@@ -197,17 +223,10 @@ fn member_reliability(
     // started from; the two uses are independent of each other).
     let mut rng = seeded_rng(seed, RngStream::ObjectField(member.id));
     let (centre, half_extents) = (aabb.center(), aabb.extent() * 0.5);
-    let observed = match (cfg.uncertainty.unobserved, member.keyframes) {
-        (UnobservedSpace::Unknown, Some(keyframes)) => {
-            let views: Vec<&ObjectView> = keyframes.slots().iter().map(|s| &s.data).collect();
-            let radius = sphere_rays(&centre, &half_extents, &cfg.uncertainty).radius;
-            Some(ObservedSpace::of_views(&views, &centre, radius))
-        }
-        _ => None,
-    };
+    let observed = observed.filter(|_| cfg.uncertainty.unobserved == UnobservedSpace::Unknown);
     let sphere = object_reliability(&centre, &half_extents, &cfg.uncertainty, &mut rng, |points| {
         let alpha = field.eval_alpha_world(&member.field.origin, points);
-        match &observed {
+        match observed {
             Some(space) => space.unknown_where_unobserved(points, alpha),
             None => alpha,
         }

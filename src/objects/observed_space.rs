@@ -11,6 +11,12 @@
 //! ½ in unobserved cells: a field trained on one side of an object extrapolates its interior
 //! into the never-seen side as a confident solid, and rays into that side would read as certain
 //! hits.
+//!
+//! The same cells tell subcategorisation where a member's views looked
+//! ([`ObservedSpace::looked_at`]): seen free, at its surface, or glimpsed through. A part of a
+//! representative that lands elsewhere in a member was never in front of the member's cameras,
+//! and its absence from the member's cloud says nothing of the member's design
+//! ([`crate::categories::subcategories::ReversePoints`]).
 
 use nalgebra::{Point3, Vector3};
 
@@ -27,8 +33,8 @@ pub struct ObservedSpace {
     corner: Point3<f32>,
     /// Edge of one cell, metres.
     cell: f32,
-    /// Whether each cell is unobserved, x fastest.
-    unobserved: Vec<bool>,
+    /// What the views say of each cell, x fastest.
+    evidence: Vec<CellEvidence>,
 }
 
 impl ObservedSpace {
@@ -38,40 +44,54 @@ impl ObservedSpace {
         let cell = 2.0 * half_side / n as f32;
         let corner = centre - Vector3::repeat(half_side);
         let margin = 0.5 * cell * 3f32.sqrt();
-        let mut unobserved = Vec::with_capacity(n * n * n);
+        let mut evidence = Vec::with_capacity(n * n * n);
         for k in 0..n {
             for j in 0..n {
                 for i in 0..n {
                     let p = corner + Vector3::new(i as f32 + 0.5, j as f32 + 0.5, k as f32 + 0.5) * cell;
-                    let evidence = cell_evidence(views, &p, margin);
-                    unobserved.push(matches!(evidence, CellEvidence::Hidden | CellEvidence::Occluded));
+                    evidence.push(cell_evidence(views, &p, margin));
                 }
             }
         }
-        Self {
-            corner,
-            cell,
-            unobserved,
-        }
+        Self { corner, cell, evidence }
     }
 
-    /// Whether `p` (world) lies in an unobserved cell (outside the cube: no).
-    pub fn unobserved(&self, p: &Point3<f32>) -> bool {
+    /// The evidence of the cell `p` (world) lies in; `None` outside the cube.
+    fn evidence_at(&self, p: &Point3<f32>) -> Option<CellEvidence> {
         let n = OBSERVED_CELLS_PER_AXIS;
         let mut index = [0usize; 3];
         for a in 0..3 {
             let k = ((p[a] - self.corner[a]) / self.cell).floor();
             if !(0.0..n as f32).contains(&k) {
-                return false;
+                return None;
             }
             index[a] = k as usize;
         }
-        self.unobserved[(index[2] * n + index[1]) * n + index[0]]
+        Some(self.evidence[(index[2] * n + index[1]) * n + index[0]])
+    }
+
+    /// Whether `p` (world) lies in an unobserved cell (outside the cube: no).
+    pub fn unobserved(&self, p: &Point3<f32>) -> bool {
+        matches!(self.evidence_at(p), Some(CellEvidence::Hidden | CellEvidence::Occluded))
+    }
+
+    /// Whether a view looked at `p` (world): its cell was seen free, at the object's surface or
+    /// glimpsed through (outside the cube, outside every crop, hidden or occluded: no).
+    pub fn looked_at(&self, p: &Point3<f32>) -> bool {
+        matches!(
+            self.evidence_at(p),
+            Some(CellEvidence::SeenFree | CellEvidence::Surface | CellEvidence::Glimpsed)
+        )
     }
 
     /// The share of the cube's cells that are unobserved.
     pub fn unobserved_share(&self) -> f32 {
-        self.unobserved.iter().filter(|&&u| u).count() as f32 / self.unobserved.len() as f32
+        let unobserved = self
+            .evidence
+            .iter()
+            .filter(|e| matches!(e, CellEvidence::Hidden | CellEvidence::Occluded))
+            .count();
+        unobserved as f32 / self.evidence.len() as f32
     }
 
     /// `alpha` (α per point of `points`) with α = 0 — occupancy ½ under the sphere's sharpening —
@@ -102,6 +122,15 @@ mod tests {
             "between the camera and the slab"
         );
         assert!(!space.unobserved(&Point3::new(0.0, 3.0, 0.2)), "outside the cube");
+        assert!(
+            !space.looked_at(&Point3::new(0.0, 1.3, 0.2)),
+            "behind the slab: not looked at"
+        );
+        assert!(space.looked_at(&Point3::new(0.0, 0.7, 0.2)), "seen free");
+        assert!(
+            !space.looked_at(&Point3::new(0.0, 3.0, 0.2)),
+            "outside the cube: not looked at"
+        );
         let share = space.unobserved_share();
         assert!(share > 0.0 && share < 0.5, "{share}");
         let alpha = space.unknown_where_unobserved(

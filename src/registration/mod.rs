@@ -31,7 +31,7 @@ pub mod scalar_tls;
 pub mod teaser;
 
 pub use chamfer::{normalised_one_way_chamfer, one_way_chamfer};
-pub use cloud::voxel_centroids;
+pub use cloud::{half_max_extent, voxel_centroids};
 pub use config::{FrontEnd, RegistrationConfig};
 pub use cube_rotations::cube_rotations;
 pub use register::{Registration, RegistrationTrace, refine_registration, register_to_representative};

@@ -22,6 +22,7 @@ use crate::categories::subcategories::{Alignment, subcategorize};
 use crate::error::{CatmapError, Result};
 use crate::geometry::oriented_box::OrientedBox;
 use crate::ids::ObjectId;
+use crate::objects::observed_space::ObservedSpace;
 use crate::registration::voxel_centroids;
 use pairs::ClassClouds;
 
@@ -38,6 +39,9 @@ pub struct MemberInput {
     pub bounds: OrientedBox,
     /// Reliable rays of its uncertainty sphere.
     pub reliable_rays: usize,
+    /// Where its views looked, if its views are known (the reverse distance of
+    /// [`crate::categories::subcategories::ReversePoints::LookedAt`]).
+    pub looked: Option<ObservedSpace>,
 }
 
 /// A registered member.
@@ -103,7 +107,9 @@ pub fn register_class(
         .collect::<Result<_>>()?;
     let sizes: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.cloud.len())).collect();
     let versions: BTreeMap<ObjectId, u64> = members.iter().map(|m| (m.id, m.cloud_version)).collect();
-    let pairs = ClassClouds::new(&clouds, &sizes, &versions, &previous.pairs, cfg, seed);
+    let looked: BTreeMap<ObjectId, ObservedSpace> =
+        members.iter().filter_map(|m| Some((m.id, m.looked.clone()?))).collect();
+    let pairs = ClassClouds::new(&clouds, &sizes, &versions, &looked, &previous.pairs, cfg, seed);
     let reliable: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.reliable_rays)).collect();
     let ids: Vec<ObjectId> = members.iter().map(|m| m.id).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);

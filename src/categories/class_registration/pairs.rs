@@ -10,11 +10,13 @@ use rand_chacha::ChaCha8Rng;
 
 use super::config::RegistrationStart;
 use super::pair_cache::{CachedPair, PairCache, PairPoints, PairVersions};
-use crate::categories::subcategories::PairRegistration;
+use crate::categories::subcategories::{MIN_LOOKED_AT_SHARE, PairRegistration, ReversePoints};
 use crate::error::{CatmapError, Result};
 use crate::ids::ObjectId;
+use crate::objects::observed_space::ObservedSpace;
 use crate::registration::{
-    RegistrationConfig, normalised_one_way_chamfer, refine_registration, register_to_representative,
+    RegistrationConfig, half_max_extent, normalised_one_way_chamfer, one_way_chamfer, refine_registration,
+    register_to_representative,
 };
 
 /// Whether a warm-started registration scoring `warm` may stand in for the full search, given the
@@ -31,6 +33,8 @@ pub(super) struct ClassClouds<'a> {
     pub sizes: &'a BTreeMap<ObjectId, usize>,
     /// Versions of the members' observed clouds now.
     pub versions: &'a BTreeMap<ObjectId, u64>,
+    /// Where each member's views looked, by member (members without views are absent).
+    pub looked: &'a BTreeMap<ObjectId, ObservedSpace>,
     /// The pairs the class's previous registration answered: kept as they were when both clouds
     /// are unchanged, otherwise where a `warm` or `reuse` start begins.
     pub cache: &'a PairCache,
@@ -43,9 +47,9 @@ pub(super) struct ClassClouds<'a> {
     pub growth: f32,
     /// Every pair answered so far.
     answered: Mutex<PairCache>,
-    /// Reverse distances measured in this registration, by pair (each pair has one alignment
-    /// here, the one [`PairRegistration::register`] answered).
-    reverse: Mutex<BTreeMap<(ObjectId, ObjectId), f32>>,
+    /// Reverse distances measured in this registration, by pair and points (each pair has one
+    /// alignment here, the one [`PairRegistration::register`] answered).
+    reverse: Mutex<BTreeMap<(ObjectId, ObjectId, ReversePoints), f32>>,
 }
 
 impl<'a> ClassClouds<'a> {
@@ -55,6 +59,7 @@ impl<'a> ClassClouds<'a> {
         clouds: &'a BTreeMap<ObjectId, Vec<Point3<f32>>>,
         sizes: &'a BTreeMap<ObjectId, usize>,
         versions: &'a BTreeMap<ObjectId, u64>,
+        looked: &'a BTreeMap<ObjectId, ObservedSpace>,
         cache: &'a PairCache,
         cfg: &'a super::CategoryConfig,
         seed: u64,
@@ -63,6 +68,7 @@ impl<'a> ClassClouds<'a> {
             clouds,
             sizes,
             versions,
+            looked,
             cache,
             cfg: &cfg.registration,
             seed,
@@ -237,24 +243,80 @@ impl PairRegistration for ClassClouds<'_> {
         self.register(source, template)
     }
 
-    fn reverse_chamfer(&self, source: ObjectId, template: ObjectId, template_from_source: &Isometry3<f32>) -> f32 {
+    fn reverse_chamfer(
+        &self,
+        source: ObjectId,
+        template: ObjectId,
+        template_from_source: &Isometry3<f32>,
+        points: ReversePoints,
+    ) -> f32 {
         let lock = || self.reverse.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        if let Some(&known) = lock().get(&(source, template)) {
+        if let Some(&known) = lock().get(&(source, template, points)) {
             return known;
         }
         let (Ok(s), Ok(t)) = (self.cloud(source), self.cloud(template)) else {
             return f32::INFINITY;
         };
         let aligned: Vec<Point3<f32>> = s.iter().map(|p| template_from_source * p).collect();
-        let distance = normalised_one_way_chamfer(t, &aligned).unwrap_or(f32::INFINITY);
-        lock().insert((source, template), distance);
+        let looked = match points {
+            ReversePoints::All => None,
+            ReversePoints::LookedAt => self.looked.get(&source),
+        };
+        let distance = match looked {
+            Some(space) => {
+                let source_from_template = template_from_source.inverse();
+                reverse_where_looked(t, &aligned, |p| space.looked_at(&(source_from_template * p)))
+            }
+            None => normalised_one_way_chamfer(t, &aligned).unwrap_or(f32::INFINITY),
+        };
+        lock().insert((source, template, points), distance);
         distance
+    }
+}
+
+/// The normalised distance from `template` to `aligned` over the template points where
+/// `looked_at` holds, divided by the scale of the whole template; over every point when fewer
+/// than [`MIN_LOOKED_AT_SHARE`] of them qualify ([`ReversePoints::LookedAt`]).
+fn reverse_where_looked(
+    template: &[Point3<f32>],
+    aligned: &[Point3<f32>],
+    looked_at: impl Fn(&Point3<f32>) -> bool,
+) -> f32 {
+    let kept: Vec<Point3<f32>> = template.iter().copied().filter(|p| looked_at(p)).collect();
+    if (kept.len() as f32) < MIN_LOOKED_AT_SHARE * template.len() as f32 || kept.is_empty() {
+        return normalised_one_way_chamfer(template, aligned).unwrap_or(f32::INFINITY);
+    }
+    let scale = half_max_extent(template);
+    match one_way_chamfer(&kept, aligned) {
+        Ok(d) if scale > 0.0 => d / scale,
+        _ => f32::INFINITY,
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_reverse_distance_reads_only_the_parts_the_member_looked_at() {
+        // The template: a seat (z = 0) and a back (x = 0, z up to 1). The member: the seat only.
+        let seat: Vec<Point3<f32>> = (0..=10)
+            .flat_map(|i| (0..=10).map(move |j| Point3::new(i as f32 * 0.1, j as f32 * 0.1, 0.0)))
+            .collect();
+        let back: Vec<Point3<f32>> = (0..=10)
+            .flat_map(|j| (1..=10).map(move |k| Point3::new(0.0, j as f32 * 0.1, k as f32 * 0.1)))
+            .collect();
+        let template: Vec<Point3<f32>> = seat.iter().chain(&back).copied().collect();
+        // Views that saw the back's space free: the member lacks the back.
+        let everything = reverse_where_looked(&template, &seat, |_| true);
+        assert!(everything > 0.2, "the back is far from the seat: {everything}");
+        // Views that never faced the back: its space lies behind the member's surface.
+        let seen_from_above_only = reverse_where_looked(&template, &seat, |p| p.z < 0.05);
+        assert!(seen_from_above_only < 1e-6, "{seen_from_above_only}");
+        // Too few points looked at: every point is read.
+        let corner_only = reverse_where_looked(&template, &seat, |p| p.x < 0.05 && p.y < 0.05 && p.z < 0.05);
+        assert_eq!(corner_only, everything);
+    }
 
     #[test]
     fn a_warm_start_holds_only_when_it_scores_no_worse_than_stored_within_tolerance() {
