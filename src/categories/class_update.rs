@@ -14,8 +14,7 @@ use nalgebra::Point3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::class_registration::{CategoryConfig, ClassRegistration, MemberInput, class_is_due, register_class};
-use super::subcategories::ReversePoints;
+use super::class_registration::{CategoryConfig, ClassRegistration, MemberInput, class_is_due, register_class_seeing};
 use super::uncertainty::{ObjectReliability, UncertaintyStamp, UnobservedSpace, object_reliability, sphere_rays};
 use crate::error::Result;
 use crate::field::FieldBatch;
@@ -137,18 +136,11 @@ pub fn update_class(
 ) -> Result<ClassUpdate> {
     let started = Instant::now();
     let clouds: Vec<Vec<Point3<f32>>> = members.iter().map(|m| m.cloud.points()).collect();
-    // One member has no pair to register and no rank to take: nothing reads its space.
-    let looked: Vec<Option<ObservedSpace>> = members
-        .par_iter()
-        .zip(&clouds)
-        .map(|(member, cloud)| observed_space(member, cloud, cfg).filter(|_| members.len() > 1))
-        .collect();
     let reliabilities: Vec<Option<MemberReliability>> = if members.len() > 1 {
         members
             .par_iter()
             .zip(&clouds)
-            .zip(&looked)
-            .map(|((member, cloud), space)| member_reliability(member, cloud, space.as_ref(), fields, cfg, seed))
+            .map(|(member, cloud)| member_reliability(member, cloud, fields, cfg, seed))
             .collect()
     } else {
         vec![None]
@@ -159,17 +151,19 @@ pub fn update_class(
         .iter()
         .zip(clouds)
         .zip(&reliabilities)
-        .zip(looked)
-        .map(|(((m, cloud), rel), looked)| MemberInput {
+        .map(|((m, cloud), rel)| MemberInput {
             id: m.id,
             cloud,
             cloud_version: m.cloud.points_added(),
             bounds: m.bounds,
             reliable_rays: rel.as_ref().map_or(0, |r| r.sphere.reliable_rays),
-            looked: looked.filter(|_| cfg.subcategories.unplaced_reverse == ReversePoints::LookedAt),
         })
         .collect();
-    let registration = register_class(&inputs, previous, cfg, class_registration_seed(seed, class))?;
+    let looked = |id: ObjectId| {
+        let member = members.iter().find(|m| m.id == id)?;
+        observed_space(member, &member.cloud.points(), cfg)
+    };
+    let registration = register_class_seeing(&inputs, previous, cfg, class_registration_seed(seed, class), &looked)?;
     let register_time = started.elapsed();
     let new_reliabilities = members
         .iter()
@@ -186,12 +180,10 @@ pub fn update_class(
 }
 
 /// What `member`'s views observed of the cube of its uncertainty sphere (around its observed
-/// `cloud`'s world-axis box), when its views are known and the sphere
-/// ([`UnobservedSpace::Unknown`]) or the reverse distance ([`ReversePoints::LookedAt`]) may read it.
+/// `cloud`'s world-axis box), when its views are known: what the sphere reads under
+/// [`UnobservedSpace::Unknown`], and where a member no subcategory candidate accepts looked.
 fn observed_space(member: &ClassMember<'_>, cloud: &[Point3<f32>], cfg: &CategoryConfig) -> Option<ObservedSpace> {
-    let read = cfg.uncertainty.unobserved == UnobservedSpace::Unknown
-        || cfg.subcategories.unplaced_reverse == ReversePoints::LookedAt;
-    let keyframes = member.keyframes.filter(|_| read)?;
+    let keyframes = member.keyframes?;
     let aabb = Aabb::from_points(cloud)?;
     let (centre, half_extents) = (aabb.center(), aabb.extent() * 0.5);
     let views: Vec<&ObjectView> = keyframes.slots().iter().map(|s| &s.data).collect();
@@ -200,12 +192,10 @@ fn observed_space(member: &ClassMember<'_>, cloud: &[Point3<f32>], cfg: &Categor
 }
 
 /// A member's sphere: the stored one while it still describes the member, else evaluated on its
-/// field around its observed cloud's world-axis box (METHOD.md §3), reading `observed` as
-/// [`UnobservedSpace`] says. `None` without a field.
+/// field around its observed cloud's world-axis box (METHOD.md §3). `None` without a field.
 fn member_reliability(
     member: &ClassMember<'_>,
     cloud: &[Point3<f32>],
-    observed: Option<&ObservedSpace>,
     fields: &FieldBatch,
     cfg: &CategoryConfig,
     seed: u64,
@@ -223,10 +213,13 @@ fn member_reliability(
     // started from; the two uses are independent of each other).
     let mut rng = seeded_rng(seed, RngStream::ObjectField(member.id));
     let (centre, half_extents) = (aabb.center(), aabb.extent() * 0.5);
-    let observed = observed.filter(|_| cfg.uncertainty.unobserved == UnobservedSpace::Unknown);
+    let observed = match cfg.uncertainty.unobserved {
+        UnobservedSpace::Unknown => observed_space(member, cloud, cfg),
+        _ => None,
+    };
     let sphere = object_reliability(&centre, &half_extents, &cfg.uncertainty, &mut rng, |points| {
         let alpha = field.eval_alpha_world(&member.field.origin, points);
-        match observed {
+        match &observed {
             Some(space) => space.unknown_where_unobserved(points, alpha),
             None => alpha,
         }

@@ -39,10 +39,12 @@ pub struct MemberInput {
     pub bounds: OrientedBox,
     /// Reliable rays of its uncertainty sphere.
     pub reliable_rays: usize,
-    /// Where its views looked, if its views are known (the reverse distance of
-    /// [`crate::categories::subcategories::ReversePoints::LookedAt`]).
-    pub looked: Option<ObservedSpace>,
 }
+
+/// Where a member's views looked, by member, computed when first asked (the reverse distance of
+/// [`crate::categories::subcategories::ReversePoints::LookedAt`]); `None` where its views are
+/// not known.
+pub type LookedAt<'a> = &'a (dyn Fn(ObjectId) -> Option<ObservedSpace> + Sync);
 
 /// A registered member.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -91,12 +93,25 @@ impl ClassRegistration {
 /// changed since is answered as it was then, and a pair registered there starts from its previous
 /// alignment (see [`RegistrationStart`]). A representative keeps the frame it had there unless
 /// its box moved beyond `cfg.frames`' tolerance (`categories::held_frames`); the other members'
-/// frames follow their alignments to it.
+/// frames follow their alignments to it. No member's views are known: the reverse distance reads
+/// every point ([`register_class_seeing`]).
 pub fn register_class(
     members: &[MemberInput],
     previous: &ClassRegistration,
     cfg: &CategoryConfig,
     seed: u64,
+) -> Result<ClassRegistration> {
+    register_class_seeing(members, previous, cfg, seed, &|_| None)
+}
+
+/// [`register_class`] with `looked`: where each member's views looked, asked only of members that
+/// no subcategory candidate accepts otherwise.
+pub fn register_class_seeing(
+    members: &[MemberInput],
+    previous: &ClassRegistration,
+    cfg: &CategoryConfig,
+    seed: u64,
+    looked: LookedAt<'_>,
 ) -> Result<ClassRegistration> {
     if members.is_empty() {
         return Err(CatmapError::Degenerate("a class without members".into()));
@@ -107,9 +122,7 @@ pub fn register_class(
         .collect::<Result<_>>()?;
     let sizes: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.cloud.len())).collect();
     let versions: BTreeMap<ObjectId, u64> = members.iter().map(|m| (m.id, m.cloud_version)).collect();
-    let looked: BTreeMap<ObjectId, ObservedSpace> =
-        members.iter().filter_map(|m| Some((m.id, m.looked.clone()?))).collect();
-    let pairs = ClassClouds::new(&clouds, &sizes, &versions, &looked, &previous.pairs, cfg, seed);
+    let pairs = ClassClouds::new(&clouds, &sizes, &versions, looked, &previous.pairs, cfg, seed);
     let reliable: BTreeMap<ObjectId, usize> = members.iter().map(|m| (m.id, m.reliable_rays)).collect();
     let ids: Vec<ObjectId> = members.iter().map(|m| m.id).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);

@@ -2,7 +2,7 @@
 //! started as [`RegistrationStart`] says when the class's previous registration had it.
 
 use std::collections::BTreeMap;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use nalgebra::{Isometry3, Point3};
 use rand::SeedableRng;
@@ -33,8 +33,8 @@ pub(super) struct ClassClouds<'a> {
     pub sizes: &'a BTreeMap<ObjectId, usize>,
     /// Versions of the members' observed clouds now.
     pub versions: &'a BTreeMap<ObjectId, u64>,
-    /// Where each member's views looked, by member (members without views are absent).
-    pub looked: &'a BTreeMap<ObjectId, ObservedSpace>,
+    /// Where each member's views looked, computed when first asked.
+    pub looked: super::LookedAt<'a>,
     /// The pairs the class's previous registration answered: kept as they were when both clouds
     /// are unchanged, otherwise where a `warm` or `reuse` start begins.
     pub cache: &'a PairCache,
@@ -50,6 +50,8 @@ pub(super) struct ClassClouds<'a> {
     /// Reverse distances measured in this registration, by pair and points (each pair has one
     /// alignment here, the one [`PairRegistration::register`] answered).
     reverse: Mutex<BTreeMap<(ObjectId, ObjectId, ReversePoints), f32>>,
+    /// What `looked` answered so far, by member.
+    spaces: Mutex<BTreeMap<ObjectId, Option<Arc<ObservedSpace>>>>,
 }
 
 impl<'a> ClassClouds<'a> {
@@ -59,7 +61,7 @@ impl<'a> ClassClouds<'a> {
         clouds: &'a BTreeMap<ObjectId, Vec<Point3<f32>>>,
         sizes: &'a BTreeMap<ObjectId, usize>,
         versions: &'a BTreeMap<ObjectId, u64>,
-        looked: &'a BTreeMap<ObjectId, ObservedSpace>,
+        looked: super::LookedAt<'a>,
         cache: &'a PairCache,
         cfg: &'a super::CategoryConfig,
         seed: u64,
@@ -77,7 +79,19 @@ impl<'a> ClassClouds<'a> {
             growth: cfg.reregister_growth,
             answered: Mutex::new(PairCache::default()),
             reverse: Mutex::new(BTreeMap::new()),
+            spaces: Mutex::new(BTreeMap::new()),
         }
+    }
+
+    /// Where `id`'s views looked: asked of `looked` the first time, kept after.
+    fn space_of(&self, id: ObjectId) -> Option<Arc<ObservedSpace>> {
+        let lock = || self.spaces.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        if let Some(known) = lock().get(&id) {
+            return known.clone();
+        }
+        let space = (self.looked)(id).map(Arc::new);
+        lock().insert(id, space.clone());
+        space
     }
 
     fn cloud(&self, id: ObjectId) -> Result<&[Point3<f32>]> {
@@ -260,7 +274,7 @@ impl PairRegistration for ClassClouds<'_> {
         let aligned: Vec<Point3<f32>> = s.iter().map(|p| template_from_source * p).collect();
         let looked = match points {
             ReversePoints::All => None,
-            ReversePoints::LookedAt => self.looked.get(&source),
+            ReversePoints::LookedAt => self.space_of(source),
         };
         let distance = match looked {
             Some(space) => {

@@ -45,7 +45,6 @@ fn members_of(drawn: &[(u32, crate::synth::Design, u64)]) -> Vec<MemberInput> {
                 cloud: trial.source,
                 cloud_version: 1,
                 reliable_rays: 10 - id as usize,
-                looked: None,
             }
         })
         .collect()
