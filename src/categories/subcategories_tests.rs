@@ -253,14 +253,7 @@ fn a_member_no_candidate_accepts_is_asked_again_over_what_its_views_looked_at() 
             unplaced_reverse,
             ..SubcategoryRule::default()
         };
-        let groups = subcategorize(
-            &ids,
-            &rays,
-            RepresentativeChoice::Uncertainty,
-            &rule,
-            &reg,
-            &mut ChaCha8Rng::seed_from_u64(0),
-        );
+        let groups = ranked_by_rays(&ids, &rays, &rule, &reg);
         (members_of(&groups), groups)
     };
     let (all, _) = run(ReversePoints::All);
@@ -278,14 +271,7 @@ fn a_member_no_candidate_accepts_is_asked_again_over_what_its_views_looked_at() 
     let mut accepted = pairs;
     accepted[0] = ((2, 1), (0.07, 0.11));
     let reg = Table::of(&accepted).looked_at(&[((2, 1), 0.05), ((2, 5), 0.10)]);
-    let groups = subcategorize(
-        &ids,
-        &rays,
-        RepresentativeChoice::Uncertainty,
-        &SubcategoryRule::default(),
-        &reg,
-        &mut ChaCha8Rng::seed_from_u64(0),
-    );
+    let groups = ranked_by_rays(&ids, &rays, &SubcategoryRule::default(), &reg);
     assert_eq!(groups[0].members[&ObjectId(2)].reverse_chamfer, Some(0.11));
 }
 
@@ -302,13 +288,23 @@ fn a_candidate_every_member_of_its_group_leaves_is_placed_like_a_member() {
     ]);
     let ids: Vec<ObjectId> = (1..=6).map(ObjectId).collect();
     let rays = BTreeMap::from([(ObjectId(3), 900), (ObjectId(4), 800), (ObjectId(5), 700)]);
-    let groups = subcategorize(
-        &ids,
-        &rays,
-        RepresentativeChoice::Uncertainty,
-        &SubcategoryRule::default(),
-        &reg,
-        &mut ChaCha8Rng::seed_from_u64(0),
-    );
+    let groups = ranked_by_rays(&ids, &rays, &SubcategoryRule::default(), &reg);
     assert_eq!(members_of(&groups), [(4, vec![1, 2, 3, 4]), (5, vec![5, 6])]);
+}
+
+/// `ids` split by `rule`, representatives ranked by `rays` (seeded generator 0).
+fn ranked_by_rays(
+    ids: &[ObjectId],
+    rays: &BTreeMap<ObjectId, usize>,
+    rule: &SubcategoryRule,
+    reg: &Table,
+) -> Vec<Subcategory> {
+    subcategorize(
+        ids,
+        rays,
+        RepresentativeChoice::Uncertainty,
+        rule,
+        reg,
+        &mut ChaCha8Rng::seed_from_u64(0),
+    )
 }
