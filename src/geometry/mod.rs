@@ -6,3 +6,4 @@ pub mod mirror_symmetry;
 pub mod nearest;
 pub mod oriented_box;
 pub mod tracked_nearest;
+pub mod upright_box;

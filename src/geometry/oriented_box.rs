@@ -109,19 +109,8 @@ pub fn fit_minimum_volume_box(points: &[Point3<f32>]) -> Result<OrientedBox> {
     Ok(best.into_box(mean))
 }
 
-/// The upright box of `points` with the least footprint: its z along world z, turned about it so
-/// that the rectangle around the points' projection on the floor has the least area (axes as
-/// [`fit_minimum_volume_box`]'s). A partly seen object's minimum-volume box may lean (a bed seen
-/// from its foot and one side, 13°); furniture stands upright. Errors as that function does.
-pub fn fit_upright_box(points: &[Point3<f32>]) -> Result<OrientedBox> {
-    let (mean, centred) = centred_cloud(points)?;
-    let mut fit = fit_around_axis(&centred, Vector3::z());
-    fit.measure(&centred);
-    Ok(fit.into_box(mean))
-}
-
 /// The mean of `points` and the points about it; errors on an empty or non-finite cloud.
-fn centred_cloud(points: &[Point3<f32>]) -> Result<(Vector3<f64>, Vec<Vector3<f64>>)> {
+pub(super) fn centred_cloud(points: &[Point3<f32>]) -> Result<(Vector3<f64>, Vec<Vector3<f64>>)> {
     let degenerate = |why: &str| Err(CatmapError::Degenerate(why.to_owned()));
     if points.is_empty() {
         return degenerate("cannot fit a box to an empty point cloud");
@@ -137,8 +126,8 @@ fn centred_cloud(points: &[Point3<f32>]) -> Result<(Vector3<f64>, Vec<Vector3<f6
 }
 
 /// One candidate box: its axes (x, y, z = the candidate axis), extents and centre offset.
-struct AxisFit {
-    axes: [Vector3<f64>; 3],
+pub(super) struct AxisFit {
+    pub(super) axes: [Vector3<f64>; 3],
     min: Vector3<f64>,
     max: Vector3<f64>,
     volume: f64,
@@ -146,7 +135,7 @@ struct AxisFit {
 
 impl AxisFit {
     /// Recomputes the extents along the fitted axes over `points`.
-    fn measure(&mut self, points: &[Vector3<f64>]) {
+    pub(super) fn measure(&mut self, points: &[Vector3<f64>]) {
         self.min = Vector3::repeat(f64::INFINITY);
         self.max = Vector3::repeat(f64::NEG_INFINITY);
         for p in points {
@@ -156,7 +145,7 @@ impl AxisFit {
         }
     }
 
-    fn into_box(self, mean: Vector3<f64>) -> OrientedBox {
+    pub(super) fn into_box(self, mean: Vector3<f64>) -> OrientedBox {
         let local_centre = (self.min + self.max) * 0.5;
         let half = (self.max - self.min) * 0.5;
         let centre =
@@ -193,7 +182,7 @@ fn canonical_axes(axes: [Vector3<f64>; 3], half: Vector3<f64>) -> ([Vector3<f64>
     ([x, y, z], Vector3::new(half[xi], half[yi], half[up]))
 }
 
-fn fit_around_axis(points: &[Vector3<f64>], axis: Vector3<f64>) -> AxisFit {
+pub(super) fn fit_around_axis(points: &[Vector3<f64>], axis: Vector3<f64>) -> AxisFit {
     let axis = axis.normalize();
     let helper = if axis.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
     let e1 = axis.cross(&helper).normalize();
@@ -387,4 +376,4 @@ fn cone_around(axis: Vector3<f64>, angle: f64, count: usize) -> Vec<Vector3<f64>
 
 #[cfg(test)]
 #[path = "oriented_box_tests.rs"]
-mod tests;
+pub(super) mod tests;

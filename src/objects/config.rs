@@ -99,6 +99,10 @@ pub enum BoxFit {
     MinimumVolume,
     /// The upright box of least footprint (z along world z): furniture stands upright.
     Upright,
+    /// The upright box turned so that the observed faces lie on its sides where the least
+    /// footprint's turn leaves them off (an object seen from one corner: its footprint is an L,
+    /// whose least rectangle may lie along the diagonal; [`crate::geometry::upright_box`]).
+    UprightOnFaces,
 }
 
 impl Default for ObjectConfig {

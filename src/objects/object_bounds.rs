@@ -2,7 +2,8 @@
 
 use crate::error::{CatmapError, Result};
 use crate::geometry::mirror_symmetry::{MirrorPlane, SymmetryConfig, find_vertical_mirror};
-use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box, fit_upright_box};
+use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box};
+use crate::geometry::upright_box::{fit_upright_box, fit_upright_box_on_faces};
 use crate::objects::config::{BoxFit, ObjectConfig};
 use crate::objects::observed_cloud::{ObservedCloud, voxel_downsample};
 use crate::training::StreamPhase;
@@ -130,6 +131,7 @@ pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &Object
     let oriented_box = match cfg.box_fit.unwrap_or_default() {
         BoxFit::MinimumVolume => fit_minimum_volume_box(&thinned)?,
         BoxFit::Upright => fit_upright_box(&thinned)?,
+        BoxFit::UprightOnFaces => fit_upright_box_on_faces(&thinned)?,
     };
     let oriented_box = oriented_box.with_min_extent(cfg.min_extent_m);
     let mirror = match mirror {

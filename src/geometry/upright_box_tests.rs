@@ -1,0 +1,171 @@
+//! Tests of [`super`]: the least-footprint and the faces-on-sides upright boxes.
+
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector2, Vector3};
+
+use super::*;
+use crate::geometry::oriented_box::fit_minimum_volume_box;
+use crate::geometry::oriented_box::tests::box_surface;
+
+/// The turn of a box's x axis about world z, folded into [0°, 90°).
+fn turn_deg(b: &OrientedBox) -> f32 {
+    let x = b.world_from_box.rotation * Vector3::x();
+    x.y.atan2(x.x).to_degrees().rem_euclid(90.0)
+}
+
+/// How far apart two turns are, folded as a rectangle repeats (every 90°), degrees.
+fn turn_gap_deg(a: f32, b: f32) -> f32 {
+    let d = (a - b).rem_euclid(90.0);
+    d.min(90.0 - d)
+}
+
+/// A cabinet 0.80 × 0.49 × 1.2 m turned `turn_deg` about world z, seen from one corner: its front
+/// and one side every 2 cm, the part of its top near that corner, and the vertical edge where front and
+/// side meet trimmed by 3 cm each way (a mask's border there is unsure).
+fn cabinet_seen_from_a_corner(turn_deg: f32) -> Vec<Point3<f32>> {
+    let (w, d, h) = (0.80f32, 0.49f32, 1.2f32);
+    let step = 0.02;
+    let mut local = Vec::new();
+    for k in 0..=(h / step) as usize {
+        let z = k as f32 * step;
+        for i in 0..=(w / step) as usize {
+            let x = i as f32 * step;
+            if x > 0.03 {
+                local.push(Point3::new(x, 0.0, z)); // the front
+            }
+        }
+        for j in 0..=(d / step) as usize {
+            let y = j as f32 * step;
+            if y > 0.03 {
+                local.push(Point3::new(0.0, y, z)); // the side
+            }
+        }
+    }
+    for i in 0..=(w / step) as usize {
+        for j in 0..=(d / step) as usize {
+            let (x, y) = (i as f32 * step, j as f32 * step);
+            if x / w + y / d <= 0.6 && x + y > 0.03 {
+                local.push(Point3::new(x, y, h)); // the top near the corner
+            }
+        }
+    }
+    let pose = Isometry3::from_parts(
+        Translation3::new(-2.8, 2.0, 0.0),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn_deg.to_radians()),
+    );
+    local.iter().map(|p| pose * p).collect()
+}
+
+#[test]
+fn the_upright_box_of_a_leaning_slab_stands_on_world_z_turned_as_the_slab() {
+    // A 2 × 1.4 m slab 4 cm thick, tilted 15° about its long axis, turned 0.5 rad about world z:
+    // its minimum-volume box leans with it; the upright box stands, turned as the slab.
+    let tilt = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 15f32.to_radians());
+    let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.5);
+    let pose = Isometry3::from_parts(Translation3::new(1.0, 2.0, 0.4), turn * tilt);
+    let points = box_surface(&pose, Vector3::new(1.0, 0.7, 0.02), 6000, 3);
+    let z_of = |b: &OrientedBox| b.world_from_box.rotation * Vector3::z();
+    let leaning = fit_minimum_volume_box(&points).expect("ok");
+    assert!(
+        z_of(&leaning).z < 15f32.to_radians().cos() + 0.01,
+        "the minimum-volume box leans"
+    );
+    let upright = fit_upright_box(&points).expect("ok");
+    assert!(z_of(&upright).z > 0.9999, "box z is world z");
+    let x = upright.world_from_box.rotation * Vector3::x();
+    assert!(
+        (x.y.atan2(x.x) - 0.5).abs() < 0.01,
+        "x along the slab's long axis: {x:?}"
+    );
+    assert!(points.iter().all(|p| upright.contains(p, 1e-4)), "every point inside");
+    // The footprint of the tilted slab: 2 m by 1.4·cos 15° + 4 cm·sin 15°.
+    let width = 1.4 * 15f32.to_radians().cos() + 0.04 * 15f32.to_radians().sin();
+    assert!((upright.extents().x - 2.0).abs() < 0.01 && (upright.extents().y - width).abs() < 0.01);
+    assert!(fit_upright_box(&[]).is_err());
+}
+
+#[test]
+fn a_cabinet_seen_from_a_corner_gets_its_box_turned_as_its_faces() {
+    let points = cabinet_seen_from_a_corner(62.0);
+    let least = fit_upright_box(&points).expect("ok");
+    assert!(
+        turn_gap_deg(turn_deg(&least), 62.0) > 10.0,
+        "the least footprint lies along the L's diagonal: {}°",
+        turn_deg(&least)
+    );
+    let on_faces = fit_upright_box_on_faces(&points).expect("ok");
+    assert!(
+        turn_gap_deg(turn_deg(&on_faces), 62.0) < 0.5,
+        "turned as the faces: {}°",
+        turn_deg(&on_faces)
+    );
+    let e = on_faces.extents();
+    assert!(
+        (e.x - 0.80).abs() < 0.02 && (e.y - 0.49).abs() < 0.02 && (e.z - 1.2).abs() < 0.01,
+        "{e:?}"
+    );
+    assert!(points.iter().all(|p| on_faces.contains(p, 1e-4)), "every point inside");
+}
+
+#[test]
+fn a_box_seen_whole_or_a_round_object_keeps_its_least_footprint() {
+    // Seen whole, the least footprint is the faces' turn: the same box either way.
+    let pose = Isometry3::from_parts(
+        Translation3::new(1.0, 2.0, 0.4),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.5),
+    );
+    let whole = box_surface(&pose, Vector3::new(0.6, 0.3, 0.4), 6000, 5);
+    let (least, on_faces) = (
+        fit_upright_box(&whole).expect("ok"),
+        fit_upright_box_on_faces(&whole).expect("ok"),
+    );
+    assert!(
+        (least
+            .world_from_box
+            .rotation
+            .angle_to(&on_faces.world_from_box.rotation))
+            < 1e-6
+    );
+    assert!((least.extents() - on_faces.extents()).norm() < 1e-6);
+    // A lamp's round shade has no faces: its least footprint stays.
+    let shade: Vec<Point3<f32>> = (0..40)
+        .flat_map(|k| {
+            (0..72).map(move |a| {
+                let t = (a as f32 * 5.0).to_radians();
+                Point3::new(0.2 * t.cos(), 0.2 * t.sin(), 1.2 + k as f32 * 0.01)
+            })
+        })
+        .collect();
+    let (least, on_faces) = (
+        fit_upright_box(&shade).expect("ok"),
+        fit_upright_box_on_faces(&shade).expect("ok"),
+    );
+    assert!(
+        (least
+            .world_from_box
+            .rotation
+            .angle_to(&on_faces.world_from_box.rotation))
+            < 1e-6
+    );
+    assert!(fit_upright_box_on_faces(&[]).is_err());
+}
+
+#[test]
+fn points_on_a_rectangles_sides_are_closest_at_its_turn() {
+    let sides: Vec<Vector2<f64>> = (0..=20)
+        .flat_map(|i| {
+            let t = f64::from(i) / 20.0;
+            [
+                Vector2::new(t, 0.0),
+                Vector2::new(t, 0.5),
+                Vector2::new(0.0, t * 0.5),
+                Vector2::new(1.0, t * 0.5),
+            ]
+        })
+        .collect();
+    let at = |deg: f64| closeness(&sides, Vector2::new(deg.to_radians().cos(), deg.to_radians().sin()));
+    assert!(
+        (at(0.0) - sides.len() as f64 / SIDE_DISTANCE_FLOOR_M).abs() < 1e-6,
+        "every point on a side"
+    );
+    assert!(at(0.0) > 2.0 * at(30.0) && (at(0.0) - at(90.0)).abs() < 1e-6);
+}
