@@ -97,15 +97,19 @@ impl MapperConfig {
     /// bilateral filter of [`crate::sensor::depth_smoothing`]) and its boxes fitted to the
     /// cloud voxels that hold at least 3 points (`objects.box_min_voxel_points`), which leaves
     /// its stray points out, and the views' evidence allows for its noise
-    /// (`dataset.depth_noise_per_m2`); exact ones get none of it. Measured in docs/ROBUSTNESS.md.
+    /// (`dataset.depth_noise_per_m2`); exact ones get none of it, and keep the box rule the
+    /// masks set ([`crate::objects::config::ObjectConfig::with_mask_borders`]). Measured in
+    /// docs/ROBUSTNESS.md.
     pub fn with_depth_images(mut self, depth: DepthImages) -> Self {
-        let (smoothing, box_min_voxel_points, depth_noise_per_m2) = match depth {
-            DepthImages::Exact => (DepthSmoothing::None, 1, 0.0),
-            DepthImages::Camera => (DepthSmoothing::Bilateral, 3, 0.0025),
+        let (smoothing, depth_noise_per_m2) = match depth {
+            DepthImages::Exact => (DepthSmoothing::None, 0.0),
+            DepthImages::Camera => (DepthSmoothing::Bilateral, 0.0025),
         };
         self.dataset.depth_smoothing = smoothing;
         self.dataset.depth_noise_per_m2 = depth_noise_per_m2;
-        self.objects.box_min_voxel_points = box_min_voxel_points;
+        if depth == DepthImages::Camera {
+            self.objects.box_min_voxel_points = self.objects.box_min_voxel_points.max(3);
+        }
         self
     }
 
@@ -249,7 +253,16 @@ mod tests {
             "the views allow for its noise"
         );
         assert_eq!(camera.objects.box_min_voxel_points, 3);
-        assert_eq!(camera.with_depth_images(DepthImages::Exact), MapperConfig::default());
+        let exact = camera.with_depth_images(DepthImages::Exact);
+        assert_eq!(exact.dataset, MapperConfig::default().dataset);
+        assert_eq!(
+            exact.objects.box_min_voxel_points, 3,
+            "the box rule is the masks' to reset"
+        );
+        assert_eq!(
+            MapperConfig::default().with_depth_images(DepthImages::Exact),
+            MapperConfig::default()
+        );
     }
 
     #[test]

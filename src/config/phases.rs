@@ -107,11 +107,12 @@ impl MapperConfig {
     }
 
     /// The object settings the run uses: `objects`, its unset `box_fit` set by the schedule —
-    /// upright boxes under `fast`, the paper's minimum-volume boxes under `paper`.
+    /// upright boxes turned as the observed faces under `fast`, the paper's minimum-volume boxes
+    /// under `paper`.
     pub fn object_settings(&self) -> ObjectConfig {
         let mut cfg = self.objects.clone();
         cfg.box_fit.get_or_insert(match self.training_policy() {
-            SchedulePolicy::Fast => BoxFit::Upright,
+            SchedulePolicy::Fast => BoxFit::UprightOnFaces,
             SchedulePolicy::Paper => BoxFit::MinimumVolume,
         });
         cfg
@@ -258,7 +259,7 @@ mod tests {
     fn the_schedule_sets_the_unset_box_fit_and_the_config_wins() {
         let fit = |c: &MapperConfig| c.object_settings().box_fit;
         let mut fast = config(SchedulePolicy::Fast, Protocol::Online, Fields::Category);
-        assert_eq!(fit(&fast), Some(BoxFit::Upright));
+        assert_eq!(fit(&fast), Some(BoxFit::UprightOnFaces));
         let paper = config(SchedulePolicy::Paper, Protocol::Online, Fields::Category);
         assert_eq!(fit(&paper), Some(BoxFit::MinimumVolume));
         fast.objects.box_fit = Some(BoxFit::MinimumVolume);

@@ -5,6 +5,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::objects::border_votes::BorderVotes;
 use crate::objects::instance_association::AssociationConfig;
+use crate::objects::mask_trim::BandInFront;
+use crate::objects::observed_cloud::VoxelVotes;
 
 /// Object entities built from instance masks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -28,6 +30,10 @@ pub struct ObjectConfig {
     /// frame after frame. All voxels count while fewer than
     /// [`crate::objects::object_bounds::MIN_POINTS_FOR_BOX`] hold enough.
     pub box_min_voxel_points: u32,
+    /// Whether the frames that segment an object vote on its cloud's voxels: a voxel more views
+    /// see as something else (a mask bled onto the floor or the wall) is left out of the
+    /// object's points ([`crate::objects::observed_cloud`]; `by_views`, the default, or `off`).
+    pub voxel_votes: VoxelVotes,
     /// Only every n-th background pixel in each direction feeds the background cloud.
     pub background_pixel_stride: u32,
     /// Voxel edge of the background's observed cloud, metres.
@@ -55,6 +61,10 @@ pub struct ObjectConfig {
     /// How the band's pixels are decided: `frames = 0` leaves them unsure; else the labels of
     /// the last frames vote ([`crate::objects::border_votes`]).
     pub border_votes: BorderVotes,
+    /// Whether band pixels of a mask in front of everything across its border keep their
+    /// object's label (`kept`, the default) or are unsure like the rest of the band
+    /// ([`crate::objects::mask_trim::spare_pixels_in_front`]).
+    pub band_in_front: BandInFront,
     /// Where object ids come from: the dataset's (consistent) ids, or per-frame masks associated
     /// into objects ([`crate::objects::instance_association`]).
     pub association: AssociationConfig,
@@ -74,17 +84,19 @@ impl ObjectConfig {
     /// These settings for masks with `borders`: a segmenter's masks get the trim of bleeding
     /// pixels within 4 px (with 0.1 m of allowance per metre of depth) and a 2 px unsure band
     /// around every border — on the Kinect-like default scene 4.18 / 3.94 / 81.7 → 3.31 / 2.46 /
-    /// 90.9 (docs/ROBUSTNESS.md, session 32); exact masks get neither (the band costs thin parts
-    /// every pixel).
+    /// 90.9 (docs/ROBUSTNESS.md, session 32) — and boxes fitted to the cloud voxels that hold at
+    /// least 3 points (a pixel the band missed lands in a voxel of its own; session 38); exact
+    /// masks get none of it (the band costs thin parts every pixel).
     pub fn with_mask_borders(self, borders: MaskBorders) -> Self {
-        let (bleed_radius_px, bleed_depth_per_m, mask_border_px) = match borders {
-            MaskBorders::Exact => (0, 0.0, 0),
-            MaskBorders::Segmenter => (4, 0.1, 2),
+        let (bleed_radius_px, bleed_depth_per_m, mask_border_px, box_min_voxel_points) = match borders {
+            MaskBorders::Exact => (0, 0.0, 0, 1),
+            MaskBorders::Segmenter => (4, 0.1, 2, 3),
         };
         Self {
             bleed_radius_px,
             bleed_depth_per_m,
             mask_border_px,
+            box_min_voxel_points,
             ..self
         }
     }
@@ -115,6 +127,7 @@ impl Default for ObjectConfig {
             bounds_refresh_growth: 0.1,
             bounds_voxel_m: 0.02,
             box_min_voxel_points: 1,
+            voxel_votes: VoxelVotes::default(),
             background_pixel_stride: 4,
             background_voxel_m: 0.05,
             box_fit: None,
@@ -123,6 +136,7 @@ impl Default for ObjectConfig {
             bleed_depth_per_m: 0.0,
             mask_border_px: 0,
             border_votes: BorderVotes::default(),
+            band_in_front: BandInFront::default(),
             association: AssociationConfig::default(),
         }
     }
@@ -165,6 +179,7 @@ mod tests {
             ),
             (4, 0.1, 2)
         );
+        assert_eq!(segmenter.box_min_voxel_points, 3, "boxes skip lone voxels");
         assert_eq!(segmenter.bleed_depth_m, 0.1, "the rest is kept");
         let exact = segmenter.with_mask_borders(MaskBorders::Exact);
         assert_eq!(exact, ObjectConfig::default());

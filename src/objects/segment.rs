@@ -13,7 +13,9 @@ use crate::objects::frame_observation::{FrameObservation, observe_objects};
 use crate::objects::instance_association::{
     AssociationConfig, InstanceSource, InstanceTracker, MaskEvidence, MaskFate,
 };
-use crate::objects::mask_trim::{border_band, trim_bleeding_masks, with_band_unsure};
+use crate::objects::mask_trim::{
+    BandInFront, border_band, spare_pixels_in_front, trim_bleeding_masks, with_band_unsure,
+};
 use crate::sensor::frame::{InstanceLabel, InstanceMask, RgbdFrame};
 
 /// The masks of `frame` as the association sees them: every mask of `observation`, its majority
@@ -77,7 +79,12 @@ pub fn segment_frame(
 ) -> (Option<RgbdFrame>, FrameObservation) {
     let trimmed = trim_bleeding_masks(frame, cfg);
     let base = trimmed.as_ref().unwrap_or(frame);
-    let band = border_band(base, cfg.mask_border_px);
+    let band = border_band(base, cfg.mask_border_px).map(|mut band| {
+        if cfg.band_in_front == BandInFront::Kept {
+            spare_pixels_in_front(base, &mut band, cfg.mask_border_px, cfg);
+        }
+        band
+    });
     // With per-frame ids, the masks without their band are associated, and the frame before the
     // band relabelled.
     let labelled = match cfg.association.instances {

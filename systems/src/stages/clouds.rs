@@ -1,37 +1,47 @@
 //! Cloud stage: observed point clouds grow with each frame, and oriented boxes follow them.
 
 use bevy_ecs::prelude::*;
+use catmap::ids::ObjectId;
 use catmap::objects::object_bounds::{MirrorSearch, refit_stale_boxes};
 use rayon::prelude::*;
 
 use crate::components::{Background, CameraFrame, FrameObservations, Object, ObjectBounds, ObjectCloud};
 use crate::resources::{Settings, StageTimes, StreamProgress};
 
-/// Back-projects each object's masked depth pixels of the new frames into its cloud
-/// (objects in parallel), and the thinned background pixels into the background cloud.
+/// Back-projects each object's masked depth pixels of the new frames into its cloud, the frame
+/// voting on the cloud's voxels in view (`objects.voxel_votes`; objects in parallel), and the
+/// thinned background pixels into the background cloud.
 pub fn accumulate_clouds(
+    settings: Res<Settings>,
     frames: Query<(&CameraFrame, &FrameObservations), Added<FrameObservations>>,
     mut objects: Query<(&Object, &mut ObjectCloud), Without<Background>>,
     mut background: Query<&mut ObjectCloud, With<Background>>,
     mut times: ResMut<StageTimes>,
 ) {
     let _timer = times.start("clouds");
+    let votes = settings.0.objects.voxel_votes;
+    let depth_noise = settings.0.dataset.depth_noise_per_m2;
     for (frame, observations) in &frames {
-        let mut work: Vec<(Mut<ObjectCloud>, &[u32])> = objects
+        let mut work: Vec<(Mut<ObjectCloud>, &[u32], Option<ObjectId>)> = objects
             .iter_mut()
             .filter_map(|(object, cloud)| {
                 observations
                     .0
                     .objects
                     .get(&object.id)
-                    .map(|seen| (cloud, seen.pixels.as_slice()))
+                    .map(|seen| (cloud, seen.pixels.as_slice(), Some(object.id)))
             })
             .collect();
         if let Ok(cloud) = background.single_mut() {
-            work.push((cloud, &observations.0.background_pixels));
+            work.push((cloud, &observations.0.background_pixels, None));
         }
-        work.par_iter_mut().for_each(|(cloud, pixels)| {
-            cloud.0.add_pixels(&frame.0, pixels);
+        work.par_iter_mut().for_each(|(cloud, pixels, owner)| match owner {
+            Some(id) => {
+                cloud.0.add_view(&frame.0, pixels, *id, votes, depth_noise);
+            }
+            None => {
+                cloud.0.add_pixels(&frame.0, pixels);
+            }
         });
     }
 }
