@@ -37,8 +37,8 @@ pub struct ViewVotes {
 
 /// A voxel is contested when more than this many of the views that saw it saw something else
 /// for each one that saw its owner. A voxel where an object meets the floor sums both, and the
-/// views split about evenly over it (at most 3.1 to 1 on the default scene's exact masks); a
-/// bled pixel's voxel is its owner's in the one or two frames that bled.
+/// views split over it (on the default scene's exact masks one voxel of the scene beyond 3.1 to 1,
+/// at 5 to 1); a bled pixel's voxel is its owner's in the one or two frames that bled.
 pub const CONTESTED_RATIO: u32 = 4;
 
 impl ViewVotes {
