@@ -38,6 +38,7 @@ fn view(frame: u64, depth: f32) -> ObjectView {
         depth_m: vec![depth; 8],
         states: [states, states].concat(),
         depth_noise_per_m2: 0.0,
+        deepest_return_m: depth,
     }
 }
 

@@ -16,8 +16,10 @@
 //!   are nearer to the floor than the half diagonal, 9 cm);
 //! - on a pixel without depth, not the object's, whose neighbours within
 //!   [`NO_RETURN_RADIUS_PX`] have none either: the sensor saw nothing within its range there
-//!   (a room's far wall beyond a Kinect's 5 m) — **free**; on any other pixel without depth the
-//!   view says nothing.
+//!   (a room's far wall beyond a Kinect's 5 m) — **free**, if the centre lies nearer than the
+//!   deepest return of the crop (the sensor reaches at least that far; a sofa's inside 5.2–6 m
+//!   from a camera of 5 m range, behind a front beyond the range too, was called free and drawn
+//!   hollow); on any other pixel without depth the view says nothing.
 //!
 //! With a depth camera's noise allowance (`dataset.depth_noise_per_m2`, a × d²), `m` and the
 //! glimpse margin grow by a × d² on each view: one view's noisy pixel, a few centimetres deep,
@@ -162,7 +164,10 @@ pub(crate) fn view_evidence(view: &ObjectView, p_world: &Point3<f32>, margin_m: 
     };
     let d = view.depth_m[i];
     if !(d.is_finite() && d > 0.0) {
-        if view.states[i] != PixelState::ThisObject && no_depth_around(view, u as u32, v as u32) {
+        if view.states[i] != PixelState::ThisObject
+            && p_camera.z < view.deepest_return_m
+            && no_depth_around(view, u as u32, v as u32)
+        {
             ViewEvidence::Free
         } else {
             ViewEvidence::Nothing
@@ -263,6 +268,7 @@ mod tests {
             depth_m: vec![depth_m; 9],
             states: vec![PixelState::ThisObject; 9],
             depth_noise_per_m2,
+            deepest_return_m: depth_m,
         }
     }
 

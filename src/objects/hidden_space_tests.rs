@@ -63,6 +63,13 @@ fn a_patch_with_no_return_is_seen_through_and_a_lone_hole_says_nothing() {
         }
     }
     assert_eq!(cell_evidence(&[&front, &far], &behind, margin), CellEvidence::SeenFree);
+    // Deeper than the crop's deepest return the patch says nothing: the sensor's reach is known
+    // only that far (a sofa's inside beyond a 5 m range, behind its front beyond it too).
+    let short = ObjectView {
+        deepest_return_m: far.world_from_camera.inverse_transform_point(&behind).z - 0.1,
+        ..far.clone()
+    };
+    assert_eq!(cell_evidence(&[&front, &short], &behind, margin), CellEvidence::Hidden);
     // A single pixel without depth, its neighbours valid (a dropout, a hole at an edge): the
     // view says nothing there, and the cell stays hidden behind the front face.
     let mut holed = render([2.0, 1.2, 0.2], -std::f32::consts::FRAC_PI_2, &scene);

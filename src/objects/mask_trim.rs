@@ -94,7 +94,7 @@ pub fn spare_pixels_in_front(frame: &RgbdFrame, band: &mut [bool], radius_px: u3
                 return false;
             };
             let z = frame.depth_m[i];
-            if !(z > 0.0) {
+            if z.is_nan() || z <= 0.0 {
                 return false;
             }
             let beyond = z + cfg.bleed_depth_m + cfg.bleed_depth_per_m * z;

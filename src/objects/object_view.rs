@@ -102,6 +102,15 @@ pub struct ObjectView {
     /// How far a measured depth d may stray: this × d² metres (`dataset.depth_noise_per_m2`).
     #[serde(default)]
     pub depth_noise_per_m2: f32,
+    /// The deepest depth the crop measured, metres (0 when none): the sensor reaches at least
+    /// this far, so a patch without a return says nothing lies nearer
+    /// ([`super::cell_evidence`]); of what lies deeper it says nothing.
+    pub deepest_return_m: f32,
+}
+
+/// The largest valid depth of `depth_m`, 0 when none is valid.
+pub fn deepest_return(depth_m: &[f32]) -> f32 {
+    depth_m.iter().filter(|d| d.is_finite()).fold(0.0, |a, &d| a.max(d))
 }
 
 impl ObjectView {
@@ -123,6 +132,7 @@ impl ObjectView {
             depth_m.extend_from_slice(&frame.depth_m[start..end]);
             states.extend((start..end).map(|i| owner.state_of(frame.instances.label(i))));
         }
+        let deepest_return_m = deepest_return(&depth_m);
         Self {
             frame: frame.index,
             world_from_camera: frame.world_from_camera,
@@ -132,6 +142,7 @@ impl ObjectView {
             depth_m,
             states,
             depth_noise_per_m2: 0.0,
+            deepest_return_m,
         }
     }
 

@@ -212,7 +212,7 @@ impl ObservedCloud {
                 }
                 let i = v as usize * frame.intrinsics.width as usize + u as usize;
                 let d = frame.depth_m[i];
-                if !(d > 0.0) || (d - p.z).abs() > VIEW_DEPTH_TOLERANCE_M + depth_noise_per_m2 * p.z * p.z {
+                if d.is_nan() || d <= 0.0 || (d - p.z).abs() > VIEW_DEPTH_TOLERANCE_M + depth_noise_per_m2 * p.z * p.z {
                     continue;
                 }
                 match frame.instances.label(i) {

@@ -61,6 +61,7 @@ pub(crate) fn render_pitched(eye: [f32; 3], yaw: f32, pitch: f32, scene: &[Solid
             states.push(state);
         }
     }
+    let deepest_return_m = crate::objects::object_view::deepest_return(&depth_m);
     ObjectView {
         frame: FrameIndex(0),
         world_from_camera: pose,
@@ -70,6 +71,7 @@ pub(crate) fn render_pitched(eye: [f32; 3], yaw: f32, pitch: f32, scene: &[Solid
         depth_m,
         states,
         depth_noise_per_m2: 0.0,
+        deepest_return_m,
     }
 }
 

@@ -114,6 +114,7 @@ fn half_seen_views() -> Vec<ObjectView> {
                 depth_m,
                 states,
                 depth_noise_per_m2: 0.0,
+                deepest_return_m: 2.2,
             }
         })
         .collect()
