@@ -94,12 +94,10 @@ impl MapperConfig {
     }
 
     /// These settings for depth images like `depth`: a depth camera's are smoothed (the
-    /// bilateral filter of [`crate::sensor::depth_smoothing`]) and its boxes fitted to the
-    /// cloud voxels that hold at least 3 points (`objects.box_min_voxel_points`), which leaves
-    /// its stray points out, and the views' evidence allows for its noise
-    /// (`dataset.depth_noise_per_m2`); exact ones get none of it, and keep the box rule the
-    /// masks set ([`crate::objects::config::ObjectConfig::with_mask_borders`]). Measured in
-    /// docs/ROBUSTNESS.md.
+    /// bilateral filter of [`crate::sensor::depth_smoothing`]), its boxes fitted to the cloud
+    /// voxels with at least 3 points (`objects.box_min_voxel_points`: its strays left out), and
+    /// the views allow for its noise (`dataset.depth_noise_per_m2`); exact ones get none of it
+    /// and keep the masks' box rule. Measured in docs/ROBUSTNESS.md.
     pub fn with_depth_images(mut self, depth: DepthImages) -> Self {
         let (smoothing, depth_noise_per_m2) = match depth {
             DepthImages::Exact => (DepthSmoothing::None, 0.0),
@@ -255,10 +253,7 @@ mod tests {
         assert_eq!(camera.objects.box_min_voxel_points, 3);
         let exact = camera.with_depth_images(DepthImages::Exact);
         assert_eq!(exact.dataset, MapperConfig::default().dataset);
-        assert_eq!(
-            exact.objects.box_min_voxel_points, 3,
-            "the box rule is the masks' to reset"
-        );
+        assert_eq!(exact.objects.box_min_voxel_points, 3, "the masks' to reset");
         assert_eq!(
             MapperConfig::default().with_depth_images(DepthImages::Exact),
             MapperConfig::default()
