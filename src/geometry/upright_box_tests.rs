@@ -106,6 +106,18 @@ fn a_cabinet_seen_from_a_corner_gets_its_box_turned_as_its_faces() {
     assert!(points.iter().all(|p| on_faces.contains(p, 1e-4)), "every point inside");
 }
 
+/// Asserts that both upright fits of `points` give the same box (turn and extents).
+fn assert_same_upright_box(points: &[Point3<f32>]) {
+    let least = fit_upright_box(points).expect("ok");
+    let on_faces = fit_upright_box_on_faces(points).expect("ok");
+    let turn = least
+        .world_from_box
+        .rotation
+        .angle_to(&on_faces.world_from_box.rotation);
+    assert!(turn < 1e-6, "turned {turn} rad apart");
+    assert!((least.extents() - on_faces.extents()).norm() < 1e-6);
+}
+
 #[test]
 fn a_box_seen_whole_or_a_round_object_keeps_its_least_footprint() {
     // Seen whole, the least footprint is the faces' turn: the same box either way.
@@ -114,18 +126,7 @@ fn a_box_seen_whole_or_a_round_object_keeps_its_least_footprint() {
         UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.5),
     );
     let whole = box_surface(&pose, Vector3::new(0.6, 0.3, 0.4), 6000, 5);
-    let (least, on_faces) = (
-        fit_upright_box(&whole).expect("ok"),
-        fit_upright_box_on_faces(&whole).expect("ok"),
-    );
-    assert!(
-        (least
-            .world_from_box
-            .rotation
-            .angle_to(&on_faces.world_from_box.rotation))
-            < 1e-6
-    );
-    assert!((least.extents() - on_faces.extents()).norm() < 1e-6);
+    assert_same_upright_box(&whole);
     // A lamp's round shade has no faces: its least footprint stays.
     let shade: Vec<Point3<f32>> = (0..40)
         .flat_map(|k| {
@@ -135,17 +136,7 @@ fn a_box_seen_whole_or_a_round_object_keeps_its_least_footprint() {
             })
         })
         .collect();
-    let (least, on_faces) = (
-        fit_upright_box(&shade).expect("ok"),
-        fit_upright_box_on_faces(&shade).expect("ok"),
-    );
-    assert!(
-        (least
-            .world_from_box
-            .rotation
-            .angle_to(&on_faces.world_from_box.rotation))
-            < 1e-6
-    );
+    assert_same_upright_box(&shade);
     assert!(fit_upright_box_on_faces(&[]).is_err());
 }
 

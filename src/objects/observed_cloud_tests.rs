@@ -27,26 +27,12 @@ fn the_fast_floor_matches_floor() {
 
 #[test]
 fn pixel_runs_give_the_same_cloud_as_single_points() {
-    use crate::ids::{ClassId, FrameIndex};
-    use crate::sensor::frame::{CameraIntrinsics, InstanceMask};
-    let (width, height) = (8, 4);
     let frame = RgbdFrame {
-        index: FrameIndex(0),
         world_from_camera: nalgebra::Isometry3::translation(0.1, -0.2, 0.3),
-        intrinsics: CameraIntrinsics {
-            width,
-            height,
-            fx: 50.0,
-            fy: 50.0,
-            cx: 3.5,
-            cy: 1.5,
-        },
-        rgb: vec![[0; 3]; 32],
         depth_m: (0..32)
             .map(|i| if i % 5 == 0 { 0.0 } else { 1.0 + 0.01 * i as f32 })
             .collect(),
-        instances: InstanceMask::background(32),
-        classes: vec![ClassId(0); 32],
+        ..wall_frame(|_| InstanceLabel::Background, |_| 1.0)
     };
     let pixels: Vec<u32> = (0..32).collect();
     let mut by_pixels = ObservedCloud::new(0.01);
