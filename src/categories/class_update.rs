@@ -22,6 +22,7 @@ use crate::geometry::mesh::Aabb;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::ids::{ClassId, ObjectId};
 use crate::objects::keyframes::KeyframeWindow;
+use crate::objects::object_bounds::shape_points;
 use crate::objects::object_view::ObjectView;
 use crate::objects::observed_cloud::ObservedCloud;
 use crate::objects::observed_space::ObservedSpace;
@@ -55,6 +56,9 @@ pub struct ClassMember<'a> {
     pub id: ObjectId,
     /// Its observed cloud.
     pub cloud: &'a ObservedCloud,
+    /// Its cloud's voxels holding fewer points are strays, left out of its shape as out of its
+    /// box (`objects.box_min_voxel_points`; [`shape_points`]).
+    pub min_voxel_points: u32,
     /// Its minimum-volume oriented box.
     pub bounds: OrientedBox,
     /// Its per-object field.
@@ -66,6 +70,11 @@ pub struct ClassMember<'a> {
 }
 
 impl ClassMember<'_> {
+    /// The points its registration reads: its box's ([`shape_points`]).
+    fn shape_points(&self) -> Vec<Point3<f32>> {
+        shape_points(self.cloud, self.min_voxel_points)
+    }
+
     /// What its sphere would be evaluated on now.
     fn stamp(&self) -> UncertaintyStamp {
         UncertaintyStamp {
@@ -135,7 +144,7 @@ pub fn update_class(
     seed: u64,
 ) -> Result<ClassUpdate> {
     let started = Instant::now();
-    let clouds: Vec<Vec<Point3<f32>>> = members.iter().map(|m| m.cloud.points()).collect();
+    let clouds: Vec<Vec<Point3<f32>>> = members.iter().map(ClassMember::shape_points).collect();
     let reliabilities: Vec<Option<MemberReliability>> = if members.len() > 1 {
         members
             .par_iter()
@@ -160,8 +169,8 @@ pub fn update_class(
         })
         .collect();
     let looked = |id: ObjectId| {
-        let member = members.iter().find(|m| m.id == id)?;
-        observed_space(member, &member.cloud.points(), cfg)
+        let (member, input) = members.iter().zip(&inputs).find(|(m, _)| m.id == id)?;
+        observed_space(member, &input.cloud, cfg)
     };
     let registration = register_class_seeing(&inputs, previous, cfg, class_registration_seed(seed, class), &looked)?;
     let register_time = started.elapsed();
@@ -252,9 +261,88 @@ mod tests {
                 origin: Point3::origin(),
                 steps,
             },
+            min_voxel_points: 1,
             stored: None,
             keyframes: None,
         })
+    }
+
+    /// A partial, noisy view of a ladder-back chair, every point seen three times, and — with
+    /// `strays` — three points seen once 80 cm off its side (a depth camera's stray pixels).
+    fn chair_seen(seed: u64, strays: bool) -> (ObservedCloud, OrientedBox) {
+        use crate::geometry::oriented_box::fit_minimum_volume_box;
+        use crate::synth::{Design, RegistrationTrial, RegistrationTrialSpec};
+        let spec = RegistrationTrialSpec {
+            outlier_fraction: 0.0,
+            visible: (0.7, 0.8),
+            ..RegistrationTrialSpec::default()
+        };
+        let trial = RegistrationTrial::draw(Design::LadderBackChair, &spec, seed).expect("a trial");
+        let mut cloud = ObservedCloud::new(0.01);
+        for p in trial.source.iter().flat_map(|p| [p; 3]) {
+            cloud.add_point(p);
+        }
+        if strays {
+            let far = trial.source.iter().map(|p| p.x).fold(f32::MIN, f32::max) + 0.8;
+            for k in 0..3 {
+                cloud.add_point(&Point3::new(far, k as f32 * 0.05, 0.4));
+            }
+        }
+        let bounds = fit_minimum_volume_box(&shape_points(&cloud, 3)).expect("a box");
+        (cloud, bounds)
+    }
+
+    /// The largest ratio of a registered member's frame extents to its representative's, for a
+    /// chair with strays (1, the member) and one without (2, the representative).
+    fn widest_member_frame(min_voxel_points: u32) -> f32 {
+        use crate::field::{AdamWConfig, OBJECT_HIDDEN, OccupancyField};
+        let chairs = [chair_seen(1, true), chair_seen(2, false)];
+        let mut fields = FieldBatch::new(AdamWConfig::default());
+        let mut rng = seeded_rng(7, RngStream::ObjectField(ObjectId(1)));
+        let members: Vec<ClassMember<'_>> = chairs
+            .iter()
+            .enumerate()
+            .map(|(i, (cloud, bounds))| {
+                fields.push(OccupancyField::new(OBJECT_HIDDEN, 2.0, &mut rng));
+                ClassMember {
+                    id: ObjectId(i as u32 + 1),
+                    cloud,
+                    min_voxel_points,
+                    bounds: *bounds,
+                    field: MemberField {
+                        index: i,
+                        origin: bounds.center(),
+                        steps: 300,
+                    },
+                    stored: None,
+                    keyframes: None,
+                }
+            })
+            .collect();
+        let update = update_class(
+            ClassId(20),
+            &members,
+            &ClassRegistration::default(),
+            &fields,
+            &CategoryConfig::default(),
+            7,
+        )
+        .expect("registered");
+        let group = &update.registration.groups[0];
+        let rep = group.members[&group.representative].nocs.extents;
+        group
+            .members
+            .values()
+            .map(|m| m.nocs.extents.component_div(&rep).max())
+            .fold(0.0, f32::max)
+    }
+
+    #[test]
+    fn a_members_stray_voxels_leave_its_registered_frame_alone() {
+        let widest = widest_member_frame(3);
+        assert!(widest < 1.2, "the strays are left out: {widest}");
+        let stretched = widest_member_frame(1);
+        assert!(stretched > 1.5, "counted, they stretch the frame: {stretched}");
     }
 
     #[test]

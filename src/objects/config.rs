@@ -25,9 +25,10 @@ pub struct ObjectConfig {
     pub bounds_refresh_growth: f32,
     /// Voxel edge used to thin the cloud before fitting the oriented box, metres.
     pub bounds_voxel_m: f32,
-    /// Cloud voxels holding fewer points than this are left out of the box fit: a depth
-    /// camera's stray points each land in a voxel of their own, while a surface fills its voxels
-    /// frame after frame. All voxels count while fewer than
+    /// Cloud voxels holding fewer points than this are left out of the object's shape — its box
+    /// fit and its registration to its class
+    /// ([`crate::objects::object_bounds::shape_points`]): a depth camera's stray points each
+    /// land in a voxel of their own, while a surface fills its voxels frame after frame. All voxels count while fewer than
     /// [`crate::objects::object_bounds::MIN_POINTS_FOR_BOX`] hold enough.
     pub box_min_voxel_points: u32,
     /// Whether the frames that segment an object vote on its cloud's voxels: a voxel more views

@@ -39,14 +39,15 @@ pub fn register_categories(
     if !config.categories.enabled || !config.fields.enabled {
         return;
     }
-    let (steps, growth) = (
-        config.field_steps_before_registration(),
-        config.categories.reregister_growth,
-    );
+    let due = Due {
+        steps: config.field_steps_before_registration(),
+        growth: config.categories.reregister_growth,
+        min_voxel_points: config.objects.box_min_voxel_points,
+    };
     let registration = config.category_registration();
     for (entity, category, previous) in &mut categories {
         let class = category.class;
-        let Some((members, last)) = due_class(category, previous.as_deref(), &index, &objects, steps, growth) else {
+        let Some((members, last)) = due_class(category, previous.as_deref(), &index, &objects, &due) else {
             continue;
         };
         match update_class(class, &members, &last, &fields.objects, &registration, config.seed) {
@@ -66,6 +67,16 @@ pub fn register_categories(
     }
 }
 
+/// When a class is due for registration, and what its members' shapes leave out.
+struct Due {
+    /// Field steps every member needs first.
+    steps: u64,
+    /// Cloud growth that registers a class again.
+    growth: f32,
+    /// `objects.box_min_voxel_points`.
+    min_voxel_points: u32,
+}
+
 /// The class's members and its latest registration when the class is due for registration
 /// (`class_readiness`); `None` otherwise.
 fn due_class<'a>(
@@ -73,16 +84,15 @@ fn due_class<'a>(
     previous: Option<&Subcategories>,
     index: &ObjectIndex,
     objects: &'a Query<MemberParts>,
-    steps: u64,
-    growth: f32,
+    due: &Due,
 ) -> Option<(Vec<ClassMember<'a>>, ClassRegistration)> {
     let members: Vec<_> = category
         .members
         .iter()
-        .map(|id| class_member(*id, index, objects))
+        .map(|id| class_member(*id, index, objects, due.min_voxel_points))
         .collect();
     let registered = previous.map(|p| &p.registered_points);
-    if class_readiness(&members, registered, steps, growth) != ClassReadiness::Due {
+    if class_readiness(&members, registered, due.steps, due.growth) != ClassReadiness::Due {
         return None;
     }
     let last = previous.map_or_else(ClassRegistration::default, |p| p.registration());
@@ -90,11 +100,17 @@ fn due_class<'a>(
 }
 
 /// Member `id` as registration reads it: `None` until it has a box and a field.
-fn class_member<'a>(id: ObjectId, index: &ObjectIndex, objects: &'a Query<MemberParts>) -> Option<ClassMember<'a>> {
+fn class_member<'a>(
+    id: ObjectId,
+    index: &ObjectIndex,
+    objects: &'a Query<MemberParts>,
+    min_voxel_points: u32,
+) -> Option<ClassMember<'a>> {
     let (cloud, bounds, slot, loss, stored, keyframes) = objects.get(*index.0.get(&id)?).ok()?;
     Some(ClassMember {
         id,
         cloud: &cloud.0,
+        min_voxel_points,
         bounds: bounds.oriented_box,
         field: MemberField {
             index: slot.index,
