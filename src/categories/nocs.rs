@@ -76,17 +76,35 @@ pub fn aligned_member_frame(
     Ok(NocsFrame::of_box(world_from_box, extents))
 }
 
-/// Edge lengths of the smallest box with pose `world_from_box` that holds every point of `cloud`
-/// and is symmetric about its centre: `2·max |p|` per axis in the box frame.
+/// Edge lengths of the smallest box with pose `world_from_box` that holds `cloud` and is
+/// symmetric about its centre: `2·max |p|` per axis in the box frame. As an upright box's
+/// footprint ([`crate::geometry::upright_box`]), the points within
+/// [`crate::geometry::upright_box::BASE_SLAB_M`] of the cloud's lowest (world z) count only
+/// along the box axis nearest world up, unless no point lies above them: a mask grown onto the
+/// floor beside an armchair's feet made its frame 0.82 m deep for 0.70.
 fn symmetric_cover(world_from_box: &Isometry3<f32>, cloud: &[Point3<f32>]) -> Result<Vector3<f32>> {
     let box_from_world = world_from_box.inverse();
-    let mut half = Vector3::repeat(0.0f32);
+    let up_in_box = box_from_world.rotation * Vector3::z();
+    let up = up_in_box.iamax();
+    let floor = cloud.iter().map(|p| p.z).fold(f32::INFINITY, f32::min);
+    let base_top = floor + crate::geometry::upright_box::BASE_SLAB_M as f32;
+    let (mut half, mut above) = (Vector3::repeat(0.0f32), Vector3::repeat(0.0f32));
+    let mut any_above = false;
     for p in cloud {
         let q = box_from_world * p;
         if !q.coords.iter().all(|c| c.is_finite()) {
             return Err(CatmapError::Degenerate("non-finite point in an aligned cloud".into()));
         }
-        half = half.sup(&q.coords.abs());
+        let q = q.coords.abs();
+        half = half.sup(&q);
+        if p.z > base_top {
+            above = above.sup(&q);
+            any_above = true;
+        }
+    }
+    if any_above {
+        above[up] = half[up];
+        half = above;
     }
     Ok(half * 2.0)
 }
@@ -114,6 +132,34 @@ mod tests {
         let corner = frame.world_from_nocs * Point3::new(0.5, 1.0, 0.75);
         let want = b.world_from_box * Point3::new(0.2, 0.4, 0.3);
         assert!((corner - want).norm() < 1e-5, "NOCS (0.5, 1, 0.75) is the box corner");
+    }
+
+    #[test]
+    fn floor_points_beside_a_members_feet_stay_out_of_its_frame_but_not_out_of_its_height() {
+        let rep = NocsFrame::of_box(Isometry3::translation(0.0, 0.0, 0.36), Vector3::new(0.82, 0.70, 0.72));
+        // An armchair's feet and top (its frame's half extents 0.41, 0.35, 0.36), and a mask grown
+        // onto the floor 6 cm beyond its side.
+        let mut cloud: Vec<Point3<f32>> = [(-0.41, -0.35), (0.41, -0.35), (-0.41, 0.35), (0.41, 0.35)]
+            .iter()
+            .flat_map(|&(x, y)| [Point3::new(x, y, 0.0), Point3::new(x, y, 0.72)])
+            .collect();
+        let clean = aligned_member_frame(&cloud, &Isometry3::identity(), &rep, 0.1).expect("frame");
+        cloud.extend((0..5).map(|k| Point3::new(-0.2 + 0.1 * k as f32, 0.41, 0.005)));
+        let bled = aligned_member_frame(&cloud, &Isometry3::identity(), &rep, 0.1).expect("frame");
+        assert!(
+            (bled.extents - Vector3::new(0.82, 0.70, 0.72)).norm() < 1e-5,
+            "the floor points leave the frame alone: {}",
+            bled.extents
+        );
+        assert_eq!(bled, clean);
+        // Seen only at the floor's height, every point counts.
+        let flat = [Point3::new(0.3, 0.0, 0.0), Point3::new(0.0, 0.2, 0.0)];
+        let rug = aligned_member_frame(&flat, &Isometry3::identity(), &rep, 0.1).expect("frame");
+        assert!(
+            (rug.extents - Vector3::new(0.6, 0.4, 0.72)).norm() < 1e-5,
+            "{}",
+            rug.extents
+        );
     }
 
     #[test]

@@ -134,6 +134,15 @@ pub(super) struct AxisFit {
 }
 
 impl AxisFit {
+    /// Recomputes the extents of an upright fit: its sides over `footprint`, its height over
+    /// `points`.
+    pub(super) fn measure_upright(&mut self, footprint: &[Vector3<f64>], points: &[Vector3<f64>]) {
+        self.measure(points);
+        let (z_min, z_max) = (self.min.z, self.max.z);
+        self.measure(footprint);
+        (self.min.z, self.max.z) = (z_min, z_max);
+    }
+
     /// Recomputes the extents along the fitted axes over `points`.
     pub(super) fn measure(&mut self, points: &[Vector3<f64>]) {
         self.min = Vector3::repeat(f64::INFINITY);

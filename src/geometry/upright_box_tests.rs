@@ -160,3 +160,53 @@ fn points_on_a_rectangles_sides_are_closest_at_its_turn() {
     );
     assert!(at(0.0) > 2.0 * at(30.0) && (at(0.0) - at(90.0)).abs() < 1e-6);
 }
+
+/// A stool-like object 0.40 × 0.30 × 0.60 m turned 20° about world z: a top every 2 cm and four
+/// legs every centimetre of height, standing on the floor at z = 0.
+fn stool() -> Vec<Point3<f32>> {
+    let mut local = Vec::new();
+    for i in 0..=20 {
+        for j in 0..=15 {
+            local.push(Point3::new(-0.2 + i as f32 * 0.02, -0.15 + j as f32 * 0.02, 0.6));
+        }
+    }
+    for (x, y) in [(-0.19, -0.14), (0.19, -0.14), (-0.19, 0.14), (0.19, 0.14)] {
+        for k in 0..60 {
+            local.push(Point3::new(x, y, k as f32 * 0.01));
+        }
+    }
+    let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 20f32.to_radians());
+    local.iter().map(|p| turn * p).collect()
+}
+
+#[test]
+fn floor_points_beside_the_feet_stay_out_of_the_footprint_but_not_out_of_the_height() {
+    let clean = stool();
+    let mut bled = clean.clone();
+    // A mask grown onto the floor: points at floor height 6 cm beyond one side.
+    let turn = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 20f32.to_radians());
+    for k in 0..10 {
+        bled.push(turn * Point3::new(-0.15 + k as f32 * 0.03, 0.21, 0.005));
+    }
+    for fit in [fit_upright_box, fit_upright_box_on_faces] {
+        let (a, b) = (fit(&clean).expect("a box"), fit(&bled).expect("a box"));
+        assert!(
+            (a.extents() - b.extents()).abs().max() < 1e-4,
+            "the bled floor points leave the box alone: {:?} against {:?}",
+            b.extents(),
+            a.extents()
+        );
+        assert!((b.extents().z - 0.6).abs() < 1e-4, "the feet still reach the floor");
+        assert!(
+            turn_gap_deg(turn_deg(&b), 20.0) < 0.5,
+            "turned as the stool: {}",
+            turn_deg(&b)
+        );
+    }
+    // Seen from the floor's height only, a flat object keeps all its points.
+    let rug: Vec<Point3<f32>> = (0..100)
+        .map(|i| Point3::new((i % 10) as f32 * 0.1, (i / 10) as f32 * 0.05, 0.0))
+        .collect();
+    let flat = fit_upright_box(&rug).expect("a box");
+    assert!((flat.extents().x - 0.9).abs() < 1e-4, "{:?}", flat.extents());
+}
