@@ -292,8 +292,8 @@ mod tests {
         (cloud, bounds)
     }
 
-    /// The largest ratio of a registered member's frame extents to its representative's, for a
-    /// chair with strays (1, the member) and one without (2, the representative).
+    /// The largest ratio of a registered frame's extents to the box of a chair seen without
+    /// strays, for a chair with strays (1, the member) and one without (2, the representative).
     fn widest_member_frame(min_voxel_points: u32) -> f32 {
         use crate::field::{AdamWConfig, OBJECT_HIDDEN, OccupancyField};
         let chairs = [chair_seen(1, true), chair_seen(2, false)];
@@ -329,11 +329,11 @@ mod tests {
         )
         .expect("registered");
         let group = &update.registration.groups[0];
-        let rep = group.members[&group.representative].nocs.extents;
+        let chair = chairs[1].1.extents();
         group
             .members
             .values()
-            .map(|m| m.nocs.extents.component_div(&rep).max())
+            .map(|m| m.nocs.extents.component_div(&chair).max())
             .fold(0.0, f32::max)
     }
 

@@ -22,6 +22,7 @@
 use nalgebra::{Point3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
+use super::grown_box::RepresentativeBox;
 use super::nocs::NocsFrame;
 use crate::error::Result;
 
@@ -55,6 +56,9 @@ pub struct FrameHoldConfig {
     pub max_shift: f32,
     /// Largest change of the frame's scale that keeps the held one, as a fraction (0.25 = 25 %).
     pub max_rescale: f32,
+    /// `grown` (the representative's box grown to what its members saw,
+    /// [`crate::categories::grown_box`]) or `own` (its own box, the paper).
+    pub representative_box: RepresentativeBox,
 }
 
 impl Default for FrameHoldConfig {
@@ -64,6 +68,7 @@ impl Default for FrameHoldConfig {
             max_turn_rad: 0.35,
             max_shift: 0.2,
             max_rescale: 0.25,
+            representative_box: RepresentativeBox::Grown,
         }
     }
 }

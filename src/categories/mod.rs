@@ -6,6 +6,7 @@ pub mod class_registration;
 pub mod class_update;
 pub mod field_plan;
 pub mod field_set;
+pub mod grown_box;
 pub mod held_frames;
 pub mod member_hidden;
 pub mod nocs;

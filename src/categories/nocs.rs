@@ -4,12 +4,14 @@
 //! with `s = max(extent)/2`, so the box fits in the unit cube `[-1, 1]³`. Every other member is
 //! registered to the representative (`template_from_object`, rigid); in the representative's box
 //! frame its aligned cloud gets a box symmetric about the representative's centre, with extent
-//! `2·max(|max|, |min|)` per axis (at least `min_extent`), and the same construction gives its
-//! NOCS frame. All members of a category thus share axes and centre, up to their own scale.
+//! `2·max(|max|, |min|)` per axis (at least `min_extent`; the floor slab under it counts only
+//! along its upright axis, see `symmetric_cover`), and the same construction gives its NOCS
+//! frame. All members of a category thus share axes and centre, up to their own scale.
 
 use nalgebra::{Isometry3, Point3, Similarity3, Vector3};
 use serde::{Deserialize, Serialize};
 
+use super::grown_box::sides_in;
 use crate::error::{CatmapError, Result};
 use crate::geometry::oriented_box::OrientedBox;
 
@@ -77,36 +79,14 @@ pub fn aligned_member_frame(
 }
 
 /// Edge lengths of the smallest box with pose `world_from_box` that holds `cloud` and is
-/// symmetric about its centre: `2·max |p|` per axis in the box frame. As an upright box's
-/// footprint ([`crate::geometry::upright_box`]), the points within
-/// [`crate::geometry::upright_box::BASE_SLAB_M`] of the cloud's lowest (world z) count only
-/// along the box axis nearest world up, unless no point lies above them: a mask grown onto the
-/// floor beside an armchair's feet made its frame 0.82 m deep for 0.70.
+/// symmetric about its centre: `2·max |p|` per axis in the box frame, its floor slab counting only
+/// along the box's upright axis ([`super::grown_box::sides_in`]): a mask grown onto the floor
+/// beside an armchair's feet made its frame 0.82 m deep for 0.70.
 fn symmetric_cover(world_from_box: &Isometry3<f32>, cloud: &[Point3<f32>]) -> Result<Vector3<f32>> {
-    let box_from_world = world_from_box.inverse();
-    let up_in_box = box_from_world.rotation * Vector3::z();
-    let up = up_in_box.iamax();
-    let floor = cloud.iter().map(|p| p.z).fold(f32::INFINITY, f32::min);
-    let base_top = floor + crate::geometry::upright_box::BASE_SLAB_M as f32;
-    let (mut half, mut above) = (Vector3::repeat(0.0f32), Vector3::repeat(0.0f32));
-    let mut any_above = false;
-    for p in cloud {
-        let q = box_from_world * p;
-        if !q.coords.iter().all(|c| c.is_finite()) {
-            return Err(CatmapError::Degenerate("non-finite point in an aligned cloud".into()));
-        }
-        let q = q.coords.abs();
-        half = half.sup(&q);
-        if p.z > base_top {
-            above = above.sup(&q);
-            any_above = true;
-        }
+    if cloud.iter().any(|p| !p.coords.iter().all(|c| c.is_finite())) {
+        return Err(CatmapError::Degenerate("non-finite point in an aligned cloud".into()));
     }
-    if any_above {
-        above[up] = half[up];
-        half = above;
-    }
-    Ok(half * 2.0)
+    Ok(sides_in(world_from_box, cloud).map_or_else(Vector3::zeros, |(lo, hi)| (-lo).sup(&hi) * 2.0))
 }
 
 #[cfg(test)]

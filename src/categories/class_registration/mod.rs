@@ -16,6 +16,7 @@ pub use config::{CategoryConfig, RegistrationStart};
 pub use pair_cache::{CachedPair, PairCache, PairPoints, PairVersions};
 pub use pairs::warm_start_holds;
 
+use crate::categories::grown_box::{RepresentativeBox, grown_box};
 use crate::categories::held_frames::{RepresentativeFrame, hold_frame};
 use crate::categories::nocs::{NocsFrame, aligned_member_frame, representative_frame};
 use crate::categories::subcategories::{Alignment, subcategorize};
@@ -140,9 +141,21 @@ pub fn register_class_seeing(
         .into_iter()
         .map(|group| {
             let rep = group.representative;
+            let rep_box = match cfg.frames.representative_box {
+                RepresentativeBox::Grown => {
+                    let aligned: Vec<Vec<Point3<f32>>> = group
+                        .members
+                        .iter()
+                        .filter(|(id, _)| **id != rep)
+                        .map(|(id, a)| by_id[id].cloud.iter().map(|p| a.template_from_object * p).collect())
+                        .collect();
+                    grown_box(&by_id[&rep].bounds, &aligned)
+                }
+                RepresentativeBox::Own => by_id[&rep].bounds,
+            };
             let rep_frame = hold_frame(
                 held.get(&rep),
-                representative_frame(&by_id[&rep].bounds),
+                representative_frame(&rep_box),
                 &by_id[&rep].cloud,
                 &cfg.frames,
                 cfg.min_extent_m,
