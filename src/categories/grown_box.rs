@@ -19,7 +19,7 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::oriented_box::OrientedBox;
-use crate::geometry::upright_box::BASE_SLAB_M;
+use crate::geometry::upright_box::base_slab_top;
 
 /// Fewest registered members (the representative aside) whose sides move the representative's
 /// box: one member's registration alone does not (two nightstands, the front of neither ever
@@ -67,18 +67,13 @@ pub fn grown_box(representative: &OrientedBox, aligned: &[Vec<Point3<f32>>]) -> 
 }
 
 /// The lowest and highest coordinates of `cloud` (world) along the axes of the box at
-/// `world_from_box`, its floor slab (the points within [`BASE_SLAB_M`] of its lowest) counting
-/// only along the axis nearest world up (all of it when nothing lies above the slab): a mask grown
-/// onto the floor beside an object's feet puts points there. `None` for an empty or non-finite
-/// cloud.
+/// `world_from_box`, its floor slab ([`base_slab_top`]) counting only along the axis nearest
+/// world up (all of it when nothing lies above the slab): a mask grown onto the floor beside an
+/// object's feet puts points there. `None` for an empty or non-finite cloud.
 pub(super) fn sides_in(world_from_box: &Isometry3<f32>, cloud: &[Point3<f32>]) -> Option<(Vector3<f32>, Vector3<f32>)> {
     let box_from_world = world_from_box.inverse();
     let up = (box_from_world.rotation * Vector3::z()).iamax();
-    let floor = cloud.iter().map(|p| p.z).fold(f32::INFINITY, f32::min);
-    if !floor.is_finite() {
-        return None;
-    }
-    let base_top = floor + BASE_SLAB_M as f32;
+    let base_top = base_slab_top(cloud.iter().map(|p| f64::from(p.z)))?;
     let (mut lo, mut hi) = (Vector3::repeat(f32::INFINITY), Vector3::repeat(f32::NEG_INFINITY));
     let (mut lo_above, mut hi_above) = (lo, hi);
     for p in cloud {
@@ -87,7 +82,7 @@ pub(super) fn sides_in(world_from_box: &Isometry3<f32>, cloud: &[Point3<f32>]) -
             return None;
         }
         (lo, hi) = (lo.inf(&q), hi.sup(&q));
-        if p.z > base_top {
+        if f64::from(p.z) > base_top {
             (lo_above, hi_above) = (lo_above.inf(&q), hi_above.sup(&q));
         }
     }

@@ -61,9 +61,18 @@ pub fn fit_upright_box(points: &[Point3<f32>]) -> Result<OrientedBox> {
 /// The points more than [`BASE_SLAB_M`] above the lowest of `points`; all of them when none is
 /// (a flat object).
 pub fn footprint_points(points: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
-    let floor = points.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
-    let above: Vec<Vector3<f64>> = points.iter().filter(|p| p.z > floor + BASE_SLAB_M).copied().collect();
+    let Some(top) = base_slab_top(points.iter().map(|p| p.z)) else {
+        return points.to_vec();
+    };
+    let above: Vec<Vector3<f64>> = points.iter().filter(|p| p.z > top).copied().collect();
     if above.is_empty() { points.to_vec() } else { above }
+}
+
+/// The top of the floor slab under points at `heights` (world up, metres): [`BASE_SLAB_M`] above
+/// the lowest; `None` when no height is finite. Points at or below it are slab.
+pub fn base_slab_top(heights: impl IntoIterator<Item = f64>) -> Option<f64> {
+    let floor = heights.into_iter().fold(f64::INFINITY, f64::min);
+    floor.is_finite().then_some(floor + BASE_SLAB_M)
 }
 
 /// The upright box of `points` turned so that its observed faces lie on its sides where the
