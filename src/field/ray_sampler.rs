@@ -13,7 +13,11 @@
 //!   `d + clip(N(0, (band/3)²), ±band)`;
 //! - if it shows another object or the background: `surface_samples` stratified in
 //!   `[d − band, d + behind]` — the ray stops just behind the occluder;
-//! - invalid depth: all samples stratified in `[0, max valid depth of the step's rays]`.
+//! - invalid depth: all samples stratified in `[0, max valid depth of the step's rays]`; for
+//!   another object's pixel with a depth within [`NO_RETURN_RADIUS_PX`] (a depth camera's hole
+//!   at a depth edge), in `[0, nearest of those depths − band]`: the surface beside the hole hid
+//!   what lies behind it, and a ray through to the step's deepest return carved an object's
+//!   unseen legs behind a table's edge.
 //!
 //! The rays are returned with those of this object's (and unknown) pixels first: the others'
 //! colour is never read, and a step skips their colour branch.
@@ -26,7 +30,7 @@ use super::samples::RaySamples;
 use super::solid_prior::{PriorRays, append_prior_rays};
 use crate::geometry::mirror_symmetry::MirrorPlane;
 use crate::geometry::oriented_box::OrientedBox;
-use crate::objects::cell_evidence::{GLIMPSE_MARGIN_M, ViewEvidence, view_evidence};
+use crate::objects::cell_evidence::{GLIMPSE_MARGIN_M, NO_RETURN_RADIUS_PX, ViewEvidence, view_evidence};
 use crate::objects::hidden_space::{CellRules, FREE_CLEARANCE_M, HiddenSpace, HiddenSpaceCache};
 use crate::objects::keyframes::KeyframeWindow;
 use crate::objects::object_view::{ObjectView, PixelState};
@@ -227,7 +231,13 @@ fn sample_rays(
         let carve = crossing
             .filter(|_| depth > 0.0 && cfg.carving_samples() > 0)
             .and_then(|c| carving_interval(c, free_end, MIN_CARVE_M));
-        depths_along_ray(depth, state, max_depth, carve, cfg, rng, &mut z);
+        let reach = match (depth > 0.0, state.reads_colour()) {
+            (false, false) => view
+                .nearest_return_around(u, row, NO_RETURN_RADIUS_PX)
+                .map_or(max_depth, |d| (d - cfg.surface_band_m).max(f32::MIN_POSITIVE)),
+            _ => max_depth,
+        };
+        depths_along_ray(depth, state, reach, carve, cfg, rng, &mut z);
         if reflect.is_some() && passes_the_observed_surface(views, &camera, &dir, &z, depth) {
             continue;
         }
@@ -283,11 +293,12 @@ fn pixel_ray(view: &ObjectView, u: u32, row: u32) -> (Point3<f32>, Vector3<f32>)
 const MIN_CARVE_M: f32 = 1e-3;
 
 /// The sorted sample depths of one ray (see the module doc), written into `z`; `carve` is the
-/// ray's carving interval in the object's box, if any.
+/// ray's carving interval in the object's box, if any; a ray without depth is sampled up to
+/// `reach`.
 fn depths_along_ray(
     depth: f32,
     state: PixelState,
-    max_depth: f32,
+    reach: f32,
     carve: Option<(f32, f32)>,
     cfg: &RaySamplerConfig,
     rng: &mut impl Rng,
@@ -296,7 +307,7 @@ fn depths_along_ray(
     z.clear();
     let band = cfg.surface_band_m;
     if depth <= 0.0 {
-        let far = if max_depth > 0.0 { max_depth } else { band };
+        let far = if reach > 0.0 { reach } else { band };
         stratified(0.0, far, cfg.samples_per_ray(), rng, z);
         return;
     }

@@ -200,6 +200,50 @@ fn invalid_depth_samples_up_to_the_deepest_valid_ray() {
 }
 
 #[test]
+fn another_objects_hole_at_a_depth_edge_is_free_only_before_the_nearest_return_beside_it() {
+    // This object at 3 m on the left half, another object 1.5 m away on the right half, and a
+    // hole (no depth) in one pixel of each: the other object's hole hid what lies behind it.
+    let mut v = view(0, 3.0);
+    for (i, d) in v.depth_m.iter_mut().enumerate() {
+        if i % 4 >= 2 {
+            *d = 1.5;
+        }
+    }
+    v.depth_m[0] = 0.0;
+    v.depth_m[3] = 0.0;
+    let refs = [&v];
+    let cfg = RaySamplerConfig {
+        keyframes_per_step: 1,
+        pixels_per_keyframe: 64,
+        ..RaySamplerConfig::OBJECT
+    };
+    let rays = draw_unboxed(&refs, &[0], &cfg, 5);
+    let s = rays.samples_per_ray;
+    let holes = |state: PixelState| -> Vec<&[f32]> {
+        (0..rays.num_rays())
+            .filter(|&r| rays.depth_m[r] == 0.0 && rays.states[r] == state)
+            .map(|r| &rays.z[r * s..(r + 1) * s])
+            .collect()
+    };
+    let (other, own) = (holes(PixelState::OtherObject), holes(PixelState::ThisObject));
+    assert!(!other.is_empty() && !own.is_empty(), "both holes drawn");
+    let before_occluder = 1.5 - cfg.surface_band_m;
+    for z in other {
+        assert!(z.iter().all(|&zi| zi <= before_occluder), "{z:?}");
+        assert!(
+            z[s - 1] > 0.8 * before_occluder,
+            "the ray is free up to the occluder: {z:?}"
+        );
+    }
+    for z in own {
+        assert!(
+            z[s - 1] > 2.7,
+            "this object's hole still reaches the deepest return: {z:?}"
+        );
+    }
+}
+
+#[test]
 fn the_same_seed_draws_the_same_rays() {
     let views = [view(0, 2.0), view(1, 2.5), view(2, 1.5)];
     let refs: Vec<&ObjectView> = views.iter().collect();

@@ -199,13 +199,7 @@ pub(crate) fn view_evidence(view: &ObjectView, p_world: &Point3<f32>, margin_m: 
 /// `dataset.max_depth_m`). A depth camera's holes at depth edges and its random dropouts are a
 /// pixel or two wide, with valid neighbours.
 fn no_depth_around(view: &ObjectView, u: u32, v: u32) -> bool {
-    let r = NO_RETURN_RADIUS_PX;
-    (v.saturating_sub(r)..=v + r).all(|y| {
-        (u.saturating_sub(r)..=u + r).all(|x| {
-            view.index_of(x, y)
-                .is_none_or(|j| view.depth_m[j].is_nan() || view.depth_m[j] <= 0.0)
-        })
-    })
+    view.nearest_return_around(u, v, NO_RETURN_RADIUS_PX).is_none()
 }
 
 /// What all `views` together say of the point: seen free in any view wins, then behind another

@@ -166,6 +166,20 @@ impl ObjectView {
             .then(|| ((v - self.region.v_min) * self.region.width() + (u - self.region.u_min)) as usize)
     }
 
+    /// The nearest depth measured within `radius_px` of full-frame pixel `(u, v)` in the crop
+    /// (the least valid depth of the square window), if any: a depth camera's holes at depth
+    /// edges are a pixel or two wide, and the nearer side of the edge is the surface that hid
+    /// what lies behind.
+    pub fn nearest_return_around(&self, u: u32, v: u32, radius_px: u32) -> Option<f32> {
+        let window = (v.saturating_sub(radius_px)..=v + radius_px)
+            .flat_map(|y| (u.saturating_sub(radius_px)..=u + radius_px).map(move |x| (x, y)));
+        window
+            .filter_map(|(x, y)| self.index_of(x, y))
+            .map(|j| self.depth_m[j])
+            .filter(|d| d.is_finite() && *d > 0.0)
+            .min_by(f32::total_cmp)
+    }
+
     /// Bytes held by the crop's pixel arrays.
     pub fn byte_size(&self) -> usize {
         self.rgb.len() * 3 + self.depth_m.len() * 4 + self.states.len()

@@ -13,10 +13,28 @@ pub enum FrontEnd {
     Fpfh,
 }
 
+/// Which rotations the registration searches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Rotations {
+    /// Every rotation (METHOD.md §4): the 24 cube rotations as starts, ICP in SO(3).
+    #[default]
+    Any,
+    /// Turns about world up only (z): both clouds stand on one floor. Starts every
+    /// `twist_deg` about z, ICP solves for the turn about z and a translation. A partly seen
+    /// object's cloud tilts under a free rotation (a chair seen at 20 % from behind a table was
+    /// registered 4–12° off upright), but that chair completed worse upright on the clean
+    /// default scene (1.9–3.0 → 3.5–4.3 cm over three mapper seeds; docs/ROBUSTNESS.md): not the
+    /// default.
+    AboutUp,
+}
+
 /// Registration of a partially observed object to its category representative (METHOD.md §4).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RegistrationConfig {
+    /// Which rotations are searched: `"any"` (METHOD.md §4, the default) or `"about_up"`.
+    pub rotations: Rotations,
     /// Correspondence front end.
     pub front_end: FrontEnd,
     /// Edge of the voxel grid both clouds are thinned on (one centroid per voxel) before the
@@ -87,6 +105,7 @@ pub struct RegistrationConfig {
 impl Default for RegistrationConfig {
     fn default() -> Self {
         Self {
+            rotations: Rotations::Any,
             front_end: FrontEnd::AllToAll,
             voxel_m: 0.1,
             max_pairs: 10_000,

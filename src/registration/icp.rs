@@ -16,7 +16,8 @@
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
 
-use super::horn::weighted_rigid;
+use super::config::Rotations;
+use super::horn::{weighted_rigid, weighted_rigid_about_z};
 use crate::geometry::nearest::PointIndex;
 use crate::geometry::tracked_nearest::TrackedNearest;
 
@@ -31,6 +32,8 @@ pub struct IcpParams {
     pub keep_fraction: f32,
     /// A step smaller than this (radians of turn and metres of move) ends the run.
     pub step_tolerance: f64,
+    /// The rotations each step solves over.
+    pub rotations: Rotations,
 }
 
 /// Why an ICP run stopped.
@@ -135,7 +138,11 @@ pub fn icp_point_to_point(
             result.stop = IcpStop::TooFewPairs;
             break;
         }
-        let (rotation, translation) = weighted_rigid(&a, &b, &vec![1.0; a.len()]);
+        let solve = match params.rotations {
+            Rotations::Any => weighted_rigid,
+            Rotations::AboutUp => weighted_rigid_about_z,
+        };
+        let (rotation, translation) = solve(&a, &b, &vec![1.0; a.len()]);
         let next = Isometry3::from_parts(
             Translation3::from(translation),
             UnitQuaternion::from_rotation_matrix(&rotation),
@@ -190,6 +197,7 @@ mod tests {
             max_iterations: 100,
             keep_fraction: 1.0,
             step_tolerance: 1e-5,
+            rotations: Rotations::Any,
         };
         let fit = icp_point_to_point(&source, &index, Isometry3::identity(), &params);
         let error = fit.template_from_source * truth.inverse();
@@ -232,6 +240,7 @@ mod tests {
                 max_iterations: 100,
                 keep_fraction,
                 step_tolerance: 1e-5,
+                rotations: Rotations::Any,
             };
             let fit = icp_point_to_point(&source, &index, Isometry3::identity(), &params);
             (fit.template_from_source * truth.inverse()).translation.vector.norm()

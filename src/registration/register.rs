@@ -2,9 +2,11 @@
 //! representative, made robust to partial views and outliers.
 //!
 //! 1. Starts: the 24 [`cube_rotations`] (the rotation of start k is C_kᵀ, i.e. C_k applied to the
-//!    template), optionally each composed with `twists` turns, with the translation that aligns
-//!    the centroids; optionally one more start from the correspondence front end + TEASER++ back
-//!    end ([`super::robust_start`]; rotation-independent, so computed once).
+//!    template), optionally each composed with `twists` turns (with `rotations = "about_up"`:
+//!    turns about z every `twist_deg`, and every ICP step below solves over turns about z), with
+//!    the translation that aligns the centroids; optionally one more start from the
+//!    correspondence front end + TEASER++ back end ([`super::robust_start`]; rotation-independent,
+//!    so computed once; about up, turned to the nearest turn about z).
 //! 2. Coarse: every start runs trimmed ICP ([`icp_point_to_point`] with ρ = `keep_fraction`) at
 //!    the `search_gates_m` on clouds thinned to `search_voxel_m` (of the source, an even subset of
 //!    at most `search_points`), and is ranked by the trimmed normalised one-way Chamfer distance
@@ -30,7 +32,9 @@ use rayon::prelude::*;
 use super::RegistrationConfig;
 use super::chamfer::{normalised_one_way_chamfer, trimmed_normalised_chamfer};
 use super::cloud::{check_cloud, voxel_centroids};
+use super::config::Rotations;
 use super::cube_rotations::cube_rotations;
+use super::horn::nearest_turn_about_z;
 use super::icp::{IcpCounts, IcpParams, icp_point_to_point};
 use super::robust_start::{RobustTrace, robust_start};
 use crate::error::Result;
@@ -69,7 +73,8 @@ pub struct RegistrationTrace {
     pub coarse_points: (usize, usize),
     /// Points of the fine source and template.
     pub fine_points: (usize, usize),
-    /// Starts tried: 24·(1 + twists), plus one when the robust start succeeded.
+    /// Starts tried: 24·(1 + twists) (about up: one per `twist_deg` turn), plus one when the
+    /// robust start succeeded.
     pub starts: usize,
     /// The robust start's diagnostics, or why it failed (None when not configured).
     pub robust: Option<std::result::Result<RobustTrace, String>>,
@@ -101,7 +106,10 @@ pub fn register_to_representative<R: Rng + ?Sized>(
     let mut starts = ranked_starts(&coarse, cfg);
     let robust = cfg.robust_start.then(|| robust_start(source, template, cfg, seed));
     if let Some(Ok((pose, _))) = &robust {
-        starts.push(*pose);
+        starts.push(match cfg.rotations {
+            Rotations::Any => *pose,
+            Rotations::AboutUp => upright_start(pose, source),
+        });
     }
     let search_source = stride_subset(&coarse.source, cfg.search_points);
     let coarse_fits = coarse_search(&coarse, &search_source, &starts, cfg);
@@ -150,6 +158,7 @@ fn coarse_search(
         max_iterations: cfg.search_iterations,
         keep_fraction: cfg.keep_fraction,
         step_tolerance: cfg.icp_step_tolerance,
+        rotations: cfg.rotations,
     };
     starts
         .par_iter()
@@ -258,6 +267,7 @@ impl Level {
                         max_iterations: cfg.refine_iterations,
                         keep_fraction: cfg.keep_fraction,
                         step_tolerance: cfg.icp_step_tolerance,
+                        rotations: cfg.rotations,
                     },
                 );
                 (pose, icp + run)
@@ -269,6 +279,7 @@ impl Level {
                 max_iterations: cfg.icp_max_iterations,
                 keep_fraction: 1.0,
                 step_tolerance: cfg.icp_step_tolerance,
+                rotations: cfg.rotations,
             },
         );
         (pose, icp + run)
@@ -280,13 +291,34 @@ impl Level {
     }
 }
 
+/// `pose` turned to the turn about z nearest its rotation, its translation aligning the
+/// clouds' centroids as the pose did.
+fn upright_start(pose: &Isometry3<f64>, source: &[Point3<f32>]) -> Isometry3<f64> {
+    let turn = UnitQuaternion::from_rotation_matrix(&nearest_turn_about_z(&pose.rotation.to_rotation_matrix()));
+    let source_centroid = centroid(source);
+    let moved_centroid = pose * Point3::from(source_centroid);
+    Isometry3::from_parts(Translation3::from(moved_centroid.coords - turn * source_centroid), turn)
+}
+
 fn centroid(points: &[Point3<f32>]) -> Vector3<f64> {
     points.iter().map(|p| p.coords.cast::<f64>()).sum::<Vector3<f64>>() / points.len().max(1) as f64
 }
 
-/// Start rotations: C_kᵀ for the 24 cube rotations, each also composed with the `twists`.
+/// Start rotations: C_kᵀ for the 24 cube rotations, each also composed with the `twists`; with
+/// [`Rotations::AboutUp`], turns about z every `twist_deg` (every 90° without twists).
 fn start_rotations(cfg: &RegistrationConfig) -> Vec<UnitQuaternion<f64>> {
     let angle = f64::from(cfg.twist_deg).to_radians();
+    if cfg.rotations == Rotations::AboutUp {
+        let step = if cfg.twists > 0 && angle > 0.0 {
+            angle
+        } else {
+            std::f64::consts::FRAC_PI_2
+        };
+        let count = (std::f64::consts::TAU / step).round().max(1.0) as usize;
+        return (0..count)
+            .map(|k| UnitQuaternion::from_axis_angle(&Vector3::z_axis(), k as f64 * step))
+            .collect();
+    }
     let mut twists = vec![UnitQuaternion::identity()];
     if cfg.twists > 0 {
         for axis in [Vector3::x(), Vector3::y(), Vector3::z()] {

@@ -20,6 +20,7 @@ use super::furniture::Design;
 use crate::error::Result;
 use crate::geometry::mesh::Aabb;
 use crate::geometry::nearest::PointIndex;
+use crate::registration::Rotations;
 use crate::rng::standard_normal_f32;
 
 /// Samples of the dense surface [`RegistrationTrial::aligned_cloud_distance`] measures against.
@@ -40,6 +41,9 @@ pub struct RegistrationTrialSpec {
     pub outlier_fraction: f32,
     /// Radius of the ball the translation is drawn from, metres.
     pub max_translation_m: f32,
+    /// The rotations the pose is drawn from: any (uniform), or turns about z (the object stays
+    /// upright, as furniture on a floor).
+    pub rotations: Rotations,
 }
 
 impl Default for RegistrationTrialSpec {
@@ -52,6 +56,7 @@ impl Default for RegistrationTrialSpec {
             noise_sigma_m: 0.01,
             outlier_fraction: 0.2,
             max_translation_m: 1.0,
+            rotations: Rotations::Any,
         }
     }
 }
@@ -110,12 +115,17 @@ impl RegistrationTrial {
         for _ in 0..outliers {
             local.push(min + Vector3::from_fn(|i, _| extent[i] * rng.random::<f32>()));
         }
-        let rotation = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
-            standard_normal_f32(&mut rng),
-            standard_normal_f32(&mut rng),
-            standard_normal_f32(&mut rng),
-            standard_normal_f32(&mut rng),
-        ));
+        let rotation = match spec.rotations {
+            Rotations::Any => UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                standard_normal_f32(&mut rng),
+                standard_normal_f32(&mut rng),
+                standard_normal_f32(&mut rng),
+                standard_normal_f32(&mut rng),
+            )),
+            Rotations::AboutUp => {
+                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), rng.random::<f32>() * std::f32::consts::TAU)
+            }
+        };
         let translation = loop {
             let t = Vector3::from_fn(|_, _| 2.0 * rng.random::<f32>() - 1.0);
             if t.norm() <= 1.0 {

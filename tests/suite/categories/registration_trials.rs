@@ -3,7 +3,7 @@
 //! rotation error is < 5° and the centre's translation error < 3 cm, or — for symmetric
 //! designs — the aligned clean surface lies within 1 cm (mean) of the true surface.
 
-use catmap::registration::{RegistrationConfig, refine_registration, register_to_representative};
+use catmap::registration::{RegistrationConfig, Rotations, refine_registration, register_to_representative};
 use catmap::synth::{Design, RegistrationTrial, RegistrationTrialSpec};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -39,6 +39,47 @@ fn fifty_seeded_trials_register_within_five_degrees_and_three_centimetres() {
         )
         .expect("registration");
         let estimate = fit.template_from_source();
+        let (rotation_deg, translation_m) = trial.pose_error(&estimate);
+        let cloud_m = trial.aligned_cloud_distance(&estimate).expect("distance");
+        if !((rotation_deg < 5.0 && translation_m < 0.03) || cloud_m < 0.01) {
+            failures.push(format!(
+                "seed {seed} {}: {rotation_deg:.1}°, {:.1} cm, aligned cloud {:.2} cm",
+                design.name(),
+                translation_m * 100.0,
+                cloud_m * 100.0
+            ));
+        }
+    }
+    assert!(failures.len() <= 2, "more than 5 % of the trials failed: {failures:#?}");
+}
+
+#[test]
+fn upright_trials_register_upright_within_five_degrees_and_three_centimetres() {
+    // Furniture on a floor, turned about up only, registered over turns about up
+    // (`categories.registration.rotations = "about_up"`): every estimate is upright, and the
+    // trials pass as the free search's do.
+    let spec = RegistrationTrialSpec {
+        rotations: Rotations::AboutUp,
+        ..RegistrationTrialSpec::default()
+    };
+    let cfg = RegistrationConfig {
+        rotations: Rotations::AboutUp,
+        ..RegistrationConfig::default()
+    };
+    let mut failures = Vec::new();
+    for seed in 0..50u64 {
+        let design = TRIAL_DESIGNS[seed as usize % TRIAL_DESIGNS.len()];
+        let trial = RegistrationTrial::draw(design, &spec, seed).expect("trial");
+        let fit = register_to_representative(
+            &trial.source,
+            &trial.template,
+            &cfg,
+            &mut ChaCha8Rng::seed_from_u64(seed),
+        )
+        .expect("registration");
+        let estimate = fit.template_from_source();
+        let up = estimate.rotation * nalgebra::Vector3::z();
+        assert!((up.z - 1.0).abs() < 1e-5, "seed {seed}: the estimate tilts ({up:?})");
         let (rotation_deg, translation_m) = trial.pose_error(&estimate);
         let cloud_m = trial.aligned_cloud_distance(&estimate).expect("distance");
         if !((rotation_deg < 5.0 && translation_m < 0.03) || cloud_m < 0.01) {
