@@ -28,6 +28,7 @@ pub mod normals;
 pub mod register;
 pub mod robust_start;
 pub mod scalar_tls;
+mod start_rotations;
 pub mod teaser;
 
 pub use chamfer::{normalised_one_way_chamfer, one_way_chamfer};

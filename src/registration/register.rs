@@ -25,7 +25,7 @@
 //! all-to-all result is the same for every rotation anyway. Multi-start trimmed ICP is fast
 //! (tens of ms per pair) and meets the trials in `tests/suite/categories/registration_trials.rs`.
 
-use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, RngExt};
 use rayon::prelude::*;
 
@@ -33,10 +33,9 @@ use super::RegistrationConfig;
 use super::chamfer::{normalised_one_way_chamfer, trimmed_normalised_chamfer};
 use super::cloud::{check_cloud, voxel_centroids};
 use super::config::Rotations;
-use super::cube_rotations::cube_rotations;
-use super::horn::nearest_turn_about_z;
 use super::icp::{IcpCounts, IcpParams, icp_point_to_point};
 use super::robust_start::{RobustTrace, robust_start};
+use super::start_rotations::{centroid, start_rotations, upright_start};
 use crate::error::Result;
 use crate::geometry::nearest::PointIndex;
 
@@ -153,13 +152,7 @@ fn coarse_search(
     starts: &[Isometry3<f64>],
     cfg: &RegistrationConfig,
 ) -> Vec<(Isometry3<f64>, f32, IcpCounts)> {
-    let stage = |gate: f32| IcpParams {
-        max_correspondence_m: gate,
-        max_iterations: cfg.search_iterations,
-        keep_fraction: cfg.keep_fraction,
-        step_tolerance: cfg.icp_step_tolerance,
-        rotations: cfg.rotations,
-    };
+    let stage = |gate: f32| icp_params(cfg, gate, cfg.search_iterations, cfg.keep_fraction);
     starts
         .par_iter()
         .map(|start| {
@@ -260,27 +253,12 @@ impl Level {
             .refine_gates_m
             .iter()
             .fold((start, IcpCounts::default()), |(pose, icp), &gate| {
-                let (pose, run) = self.refine(
-                    pose,
-                    &IcpParams {
-                        max_correspondence_m: gate,
-                        max_iterations: cfg.refine_iterations,
-                        keep_fraction: cfg.keep_fraction,
-                        step_tolerance: cfg.icp_step_tolerance,
-                        rotations: cfg.rotations,
-                    },
-                );
+                let (pose, run) = self.refine(pose, &icp_params(cfg, gate, cfg.refine_iterations, cfg.keep_fraction));
                 (pose, icp + run)
             });
         let (pose, run) = self.refine(
             pose,
-            &IcpParams {
-                max_correspondence_m: cfg.icp_max_correspondence_m,
-                max_iterations: cfg.icp_max_iterations,
-                keep_fraction: 1.0,
-                step_tolerance: cfg.icp_step_tolerance,
-                rotations: cfg.rotations,
-            },
+            &icp_params(cfg, cfg.icp_max_correspondence_m, cfg.icp_max_iterations, 1.0),
         );
         (pose, icp + run)
     }
@@ -291,52 +269,16 @@ impl Level {
     }
 }
 
-/// `pose` turned to the turn about z nearest its rotation, its translation aligning the
-/// clouds' centroids as the pose did.
-fn upright_start(pose: &Isometry3<f64>, source: &[Point3<f32>]) -> Isometry3<f64> {
-    let turn = UnitQuaternion::from_rotation_matrix(&nearest_turn_about_z(&pose.rotation.to_rotation_matrix()));
-    let source_centroid = centroid(source);
-    let moved_centroid = pose * Point3::from(source_centroid);
-    Isometry3::from_parts(Translation3::from(moved_centroid.coords - turn * source_centroid), turn)
-}
-
-fn centroid(points: &[Point3<f32>]) -> Vector3<f64> {
-    points.iter().map(|p| p.coords.cast::<f64>()).sum::<Vector3<f64>>() / points.len().max(1) as f64
-}
-
-/// Start rotations: C_kᵀ for the 24 cube rotations, each also composed with the `twists`; with
-/// [`Rotations::AboutUp`], turns about z every `twist_deg` (every 90° without twists).
-fn start_rotations(cfg: &RegistrationConfig) -> Vec<UnitQuaternion<f64>> {
-    let angle = f64::from(cfg.twist_deg).to_radians();
-    if cfg.rotations == Rotations::AboutUp {
-        let step = if cfg.twists > 0 && angle > 0.0 {
-            angle
-        } else {
-            std::f64::consts::FRAC_PI_2
-        };
-        let count = (std::f64::consts::TAU / step).round().max(1.0) as usize;
-        return (0..count)
-            .map(|k| UnitQuaternion::from_axis_angle(&Vector3::z_axis(), k as f64 * step))
-            .collect();
+/// ICP at `gate` for at most `iterations`, keeping `keep_fraction` of the pairs, with `cfg`'s
+/// step tolerance and rotations.
+fn icp_params(cfg: &RegistrationConfig, gate: f32, iterations: usize, keep_fraction: f32) -> IcpParams {
+    IcpParams {
+        max_correspondence_m: gate,
+        max_iterations: iterations,
+        keep_fraction,
+        step_tolerance: cfg.icp_step_tolerance,
+        rotations: cfg.rotations,
     }
-    let mut twists = vec![UnitQuaternion::identity()];
-    if cfg.twists > 0 {
-        for axis in [Vector3::x(), Vector3::y(), Vector3::z()] {
-            for sign in [1.0, -1.0] {
-                twists.push(UnitQuaternion::from_axis_angle(
-                    &Unit::new_normalize(axis * sign),
-                    angle,
-                ));
-            }
-        }
-    }
-    cube_rotations()
-        .iter()
-        .flat_map(|cube| {
-            let base = UnitQuaternion::from_rotation_matrix(&cube.transpose().cast::<f64>());
-            twists.iter().map(move |twist| base * twist)
-        })
-        .collect()
 }
 
 /// Every start rotation with the centroids aligned, its translation shifted by
