@@ -3,7 +3,8 @@
 //! - [`marching_cubes`] / [`IsoSurfaceExtractor`]: the iso-surface of a scalar grid as a closed,
 //!   welded, outward-oriented [`TriangleMesh`](crate::geometry::mesh::TriangleMesh) (inside = value > iso).
 //! - [`extract_object_mesh`]: METHOD.md §6 — sample an object's occupancy on a 5 mm grid over its
-//!   enlarged box, one z-layer at a time, and mesh it at occupancy 0.5 in world coordinates;
+//!   enlarged box, one z-layer at a time, and mesh it at its surface level (occupancy 0.75, see
+//!   [`object_grid`]) in world coordinates;
 //!   [`paint_vertices`] adds colours from the field. By default the grid is sampled coarse to fine
 //!   ([`coarse_to_fine`]): the field is evaluated densely only in blocks the surface may cross.
 //!
