@@ -12,14 +12,14 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-pub use config::{CategoryConfig, RegistrationStart};
-pub use pair_cache::{CachedPair, PairCache, PairPoints, PairVersions};
+pub use config::{CategoryConfig, RegistrationStart, SecondSearch};
+pub use pair_cache::{CachedPair, PairCache, PairPoints, PairSearches, PairVersions};
 pub use pairs::warm_start_holds;
 
 use crate::categories::grown_box::{RepresentativeBox, grown_box};
 use crate::categories::held_frames::{RepresentativeFrame, hold_frame};
 use crate::categories::nocs::{NocsFrame, aligned_member_frame, representative_frame};
-use crate::categories::subcategories::{Alignment, subcategorize};
+use crate::categories::subcategories::{Alignment, Subcategory, subcategorize};
 use crate::error::{CatmapError, Result};
 use crate::geometry::oriented_box::OrientedBox;
 use crate::ids::ObjectId;
@@ -139,6 +139,10 @@ pub fn register_class_seeing(
     let held = previous.frames();
     let groups = groups
         .into_iter()
+        .map(|group| searched_again(group, &pairs, &cfg.second_search))
+        .collect::<Result<Vec<_>>>()?;
+    let groups = groups
+        .into_iter()
         .map(|group| {
             let rep = group.representative;
             let rep_box = match cfg.frames.representative_box {
@@ -187,6 +191,22 @@ pub fn register_class_seeing(
         groups,
         pairs: pairs.into_answered(),
     })
+}
+
+/// `group` with every member that fits its representative worse than `second.above` searched
+/// again ([`SecondSearch`]), each keeping the better alignment.
+fn searched_again(mut group: Subcategory, pairs: &ClassClouds<'_>, second: &SecondSearch) -> Result<Subcategory> {
+    let representative = group.representative;
+    for (id, alignment) in group.members.iter_mut().filter(|(id, _)| **id != representative) {
+        if alignment.chamfer <= second.above {
+            continue;
+        }
+        if let Some((pose, chamfer)) = pairs.search_again(*id, representative, second.keep_fraction)? {
+            alignment.template_from_object = pose;
+            alignment.chamfer = chamfer;
+        }
+    }
+    Ok(group)
 }
 
 /// Whether a class must be registered (again): it never was (`registered_points` is `None`), a

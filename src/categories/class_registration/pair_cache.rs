@@ -37,6 +37,21 @@ pub struct CachedPair {
     /// The cloud sizes its alignment was found at (older than `versions` when a `reuse` start
     /// kept an alignment found on smaller clouds).
     pub found_at: PairPoints,
+    /// Which searches its answer went through.
+    #[serde(default)]
+    pub searches: PairSearches,
+}
+
+/// Which searches a pair's answer went through.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PairSearches {
+    /// The multi-start search (or a warm start, or an alignment kept from before).
+    #[default]
+    First,
+    /// Also the second search of a member to its representative
+    /// ([`super::SecondSearch`]): the better of the two is the answer.
+    Second,
 }
 
 /// Answered pairs of one class, by (member, representative).
@@ -97,6 +112,7 @@ mod tests {
                 source: 100,
                 template: 200,
             },
+            searches: PairSearches::First,
         };
         let cache = PairCache(BTreeMap::from([((a, b), cached)]));
         assert_eq!(cache.unchanged(a, b, versions), Some(&cached));

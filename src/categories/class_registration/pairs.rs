@@ -9,7 +9,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use super::config::RegistrationStart;
-use super::pair_cache::{CachedPair, PairCache, PairPoints, PairVersions};
+use super::pair_cache::{CachedPair, PairCache, PairPoints, PairSearches, PairVersions};
 use crate::categories::subcategories::{MIN_LOOKED_AT_SHARE, PairRegistration, ReversePoints};
 use crate::error::{CatmapError, Result};
 use crate::ids::ObjectId;
@@ -116,7 +116,7 @@ impl<'a> ClassClouds<'a> {
         }
     }
 
-    /// Keeps an answer and returns it.
+    /// Keeps an answer of the first search and returns it.
     fn record(
         &self,
         source: ObjectId,
@@ -124,33 +124,92 @@ impl<'a> ClassClouds<'a> {
         answer: (Isometry3<f32>, f32),
         found_at: PairPoints,
     ) -> (Isometry3<f32>, f32) {
+        self.record_after(source, template, answer, found_at, PairSearches::First)
+    }
+
+    /// Keeps an answer that went through `searches` and returns it.
+    fn record_after(
+        &self,
+        source: ObjectId,
+        template: ObjectId,
+        answer: (Isometry3<f32>, f32),
+        found_at: PairPoints,
+        searches: PairSearches,
+    ) -> (Isometry3<f32>, f32) {
         let cached = CachedPair {
             template_from_source: answer.0,
             chamfer: answer.1,
             versions: self.versions_of(source, template),
             found_at,
+            searches,
         };
         let mut answered = self.answered.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         answered.0.insert((source, template), cached);
         answer
     }
 
-    /// The full multi-start search (one random stream per ordered pair, so results do not depend
-    /// on the order pairs are tried).
     /// The answer this registration already gave for the pair, if it did.
     fn answered_now(&self, source: ObjectId, template: ObjectId) -> Option<(Isometry3<f32>, f32)> {
-        let answered = self.answered.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        answered
-            .0
-            .get(&(source, template))
+        self.answered_pair(source, template)
             .map(|c| (c.template_from_source, c.chamfer))
     }
 
+    fn answered_pair(&self, source: ObjectId, template: ObjectId) -> Option<CachedPair> {
+        let answered = self.answered.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        answered.0.get(&(source, template)).copied()
+    }
+
+    /// The second search of member `source` to its representative `template`, keeping
+    /// `keep_fraction` of the pairs ([`super::SecondSearch`]): the pair's answer in this
+    /// registration becomes the better of the two searches, and the better alignment is returned
+    /// when the second search found it. Nothing is searched for a pair this registration did not
+    /// answer, or whose answer went through the second search already (on the same clouds, or
+    /// kept from nearly the same ones).
+    pub fn search_again(
+        &self,
+        source: ObjectId,
+        template: ObjectId,
+        keep_fraction: f32,
+    ) -> Result<Option<(Isometry3<f32>, f32)>> {
+        let Some(first) = self.answered_pair(source, template) else {
+            return Ok(None);
+        };
+        if first.searches == PairSearches::Second {
+            return Ok(None);
+        }
+        let cfg = RegistrationConfig {
+            keep_fraction,
+            ..self.cfg.clone()
+        };
+        let second = self.search_with(source, template, &cfg)?;
+        let improved = second.score < first.chamfer;
+        tracing::debug!(source = %source, template = %template, first = first.chamfer, second = second.score, "pair searched again");
+        let (answer, found_at) = if improved {
+            let now = self.points_now(source, template);
+            ((second.template_from_source(), second.score), now)
+        } else {
+            ((first.template_from_source, first.chamfer), first.found_at)
+        };
+        let answer = self.record_after(source, template, answer, found_at, PairSearches::Second);
+        Ok(improved.then_some(answer))
+    }
+
+    /// The full multi-start search (one random stream per ordered pair, so results do not depend
+    /// on the order pairs are tried).
     fn search(&self, source: ObjectId, template: ObjectId) -> Result<crate::registration::Registration> {
+        self.search_with(source, template, self.cfg)
+    }
+
+    fn search_with(
+        &self,
+        source: ObjectId,
+        template: ObjectId,
+        cfg: &RegistrationConfig,
+    ) -> Result<crate::registration::Registration> {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_stream((u64::from(source.0) << 32) | u64::from(template.0));
         let started = std::time::Instant::now();
-        let found = register_to_representative(self.cloud(source)?, self.cloud(template)?, self.cfg, &mut rng)?;
+        let found = register_to_representative(self.cloud(source)?, self.cloud(template)?, cfg, &mut rng)?;
         tracing::debug!(
             source = %source,
             template = %template,
@@ -189,7 +248,7 @@ impl ClassClouds<'_> {
         let aligned: Vec<Point3<f32>> = s.iter().map(|p| pose * p).collect();
         Some(
             normalised_one_way_chamfer(&aligned, t)
-                .map(|score| self.record(source, template, (pose, score), stored.found_at)),
+                .map(|score| self.record_after(source, template, (pose, score), stored.found_at, stored.searches)),
         )
     }
 }
@@ -210,7 +269,7 @@ impl PairRegistration for ClassClouds<'_> {
             // Both clouds as they were: the search would return exactly this.
             tracing::debug!(source = %source, template = %template, "pair unchanged");
             let answer = (cached.template_from_source, cached.chamfer);
-            return Ok(self.record(source, template, answer, cached.found_at));
+            return Ok(self.record_after(source, template, answer, cached.found_at, cached.searches));
         }
         let previous = self.cache.0.get(&(source, template));
         if self.start == RegistrationStart::Reuse

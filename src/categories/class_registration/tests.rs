@@ -336,3 +336,54 @@ fn the_best_explanation_pass_keeps_its_own_pairs_until_a_cloud_grows_by_the_grow
     let after = register_class(&half, &first, &cfg, 7).unwrap();
     assert_eq!(found_at(&after, best_pair), half[1].cloud.len());
 }
+
+#[test]
+fn a_member_fitting_worse_than_the_threshold_is_searched_again_once_and_keeps_the_better_alignment() {
+    use crate::synth::Design;
+    let members = members_of(&[
+        (1, Design::LadderBackChair, 1),
+        (2, Design::LadderBackChair, 2),
+        (3, Design::LadderBackChair, 3),
+    ]);
+    let with = |above: f32| CategoryConfig {
+        second_search: SecondSearch {
+            above,
+            ..SecondSearch::default()
+        },
+        ..CategoryConfig::default()
+    };
+    let once = register_class(&members, &first_time(), &with(1.0), 7).expect("registered");
+    assert!(
+        once.pairs.0.values().all(|p| p.searches == PairSearches::First),
+        "above 1: no member is searched again"
+    );
+    let twice = register_class(&members, &first_time(), &with(0.0), 7).expect("registered");
+    assert_eq!(
+        groups(&twice),
+        groups(&once),
+        "the subcategories are the first search's"
+    );
+    let group = &twice.groups[0];
+    for (id, member) in group.members.iter().filter(|(id, _)| **id != group.representative) {
+        let pair = &twice.pairs.0[&(*id, group.representative)];
+        assert_eq!(pair.searches, PairSearches::Second, "member {id}");
+        assert_eq!(
+            pair.chamfer, member.alignment.chamfer,
+            "the pair's answer is the member's"
+        );
+        let first = once.groups[0].members[id].alignment.chamfer;
+        assert!(
+            member.alignment.chamfer <= first,
+            "member {id}: {} > {first}",
+            member.alignment.chamfer
+        );
+    }
+    // On the same clouds every pair is answered from the store, second search included: an
+    // answer planted there stays.
+    let mut planted = twice.clone();
+    for pair in planted.pairs.0.values_mut() {
+        pair.chamfer = 0.001;
+    }
+    let again = register_class(&members, &planted, &with(0.0), 7).expect("registered");
+    assert_eq!(again.pairs, planted.pairs, "nothing searched again");
+}
