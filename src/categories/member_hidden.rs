@@ -30,7 +30,7 @@ use super::nocs::NocsFrame;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::ids::FrameIndex;
 use crate::objects::cell_evidence::{CellEvidence, cell_evidence};
-use crate::objects::hidden_space::{CellRules, FreeCells, HiddenCells, HiddenSpace, HiddenSpaceCache};
+use crate::objects::hidden_space::{CellRules, FreeCells, HiddenSpace, HiddenSpaceCache};
 use crate::objects::object_view::ObjectView;
 
 /// One other member of the field: its keyframe crops and its normalised frame.
@@ -88,17 +88,18 @@ pub struct MemberCells<'a> {
 }
 
 /// For every member of `members` (with its cache, in the same order), its cells hidden in every
-/// other member of its field, picked by `hidden` ([`MemberHiddenCache::current`]; none when they
-/// are less than `min_share` of its box). Members in parallel.
+/// other member of its field, picked by `solid`'s rules for hidden and unseen cells (its free
+/// cells are not drawn; [`MemberHiddenCache::current`]; none when they are less than `min_share`
+/// of its box). Members in parallel.
 pub fn hidden_in_every_member_of_fields<'c>(
     members: &[MemberCells],
     caches: Vec<&'c mut MemberHiddenCache>,
-    hidden: HiddenCells,
+    solid: CellRules,
     min_share: f64,
 ) -> Vec<Option<&'c HiddenSpace>> {
     let rules = CellRules {
-        hidden,
         free: FreeCells::Seen,
+        ..solid
     };
     members
         .par_iter()

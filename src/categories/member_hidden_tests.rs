@@ -1,12 +1,13 @@
 use nalgebra::Point3;
 
 use super::*;
-use crate::objects::hidden_space::{FreeCells, HiddenCells};
+use crate::objects::hidden_space::{FreeCells, HiddenCells, UnseenCells};
 use crate::objects::view_fixtures::{Solid, aabb, render};
 
 /// Every hidden cell solid.
 const ALL: CellRules = CellRules {
     hidden: HiddenCells::All,
+    unseen: UnseenCells::Unknown,
     free: FreeCells::Seen,
 };
 
@@ -182,7 +183,7 @@ fn members_are_matched_only_with_the_members_of_their_own_field() {
             member(c_field, 2, vec![&side_c], box_c),
         ];
         let mut caches = vec![MemberHiddenCache::default(); 3];
-        let shared = hidden_in_every_member_of_fields(&members, caches.iter_mut().collect(), HiddenCells::All, 0.0);
+        let shared = hidden_in_every_member_of_fields(&members, caches.iter_mut().collect(), ALL, 0.0);
         shared
             .iter()
             .map(|s| s.map_or(0.0, HiddenSpace::hidden_share))

@@ -96,6 +96,7 @@ pub fn sample_window_rays(
     {
         let rules = CellRules {
             hidden: cfg.hidden_cells,
+            unseen: cfg.unseen_cells,
             free: cfg.free_cells,
         };
         let space = cache.current(&views, fitted_box, mirror, rules);

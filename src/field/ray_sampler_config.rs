@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::objects::hidden_space::{FreeCells, HiddenCells};
+use crate::objects::hidden_space::{FreeCells, HiddenCells, UnseenCells};
 
 /// How one field's rays are drawn for a training step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -38,6 +38,8 @@ pub struct RaySamplerConfig {
     pub hidden_solid_rays: Option<usize>,
     /// Which hidden cells the solid prior draws from.
     pub hidden_cells: HiddenCells,
+    /// Whether the cells no view saw under the object are hidden cells too.
+    pub unseen_cells: UnseenCells,
     /// Prior rays per step under the object's box, below the lowest point it was seen at, each
     /// sample asked to be empty (what the object stands on: the region it is meshed in reaches
     /// below the floor). `None`: the schedule's choice ([`RaySamplerConfig::below_support_rays`]);
@@ -79,6 +81,7 @@ impl RaySamplerConfig {
         behind_occluder_m: 0.05,
         hidden_solid_rays: None,
         hidden_cells: HiddenCells::Enclosed,
+        unseen_cells: UnseenCells::HiddenUnderTheObject,
         below_support_rays: None,
         seen_free_rays: None,
         free_cells: FreeCells::SeenOpenAndBeyond,
@@ -98,6 +101,7 @@ impl RaySamplerConfig {
         behind_occluder_m: 0.05,
         hidden_solid_rays: None,
         hidden_cells: HiddenCells::Enclosed,
+        unseen_cells: UnseenCells::HiddenUnderTheObject,
         below_support_rays: None,
         seen_free_rays: None,
         free_cells: FreeCells::SeenAndOpen,

@@ -6,7 +6,7 @@ use nalgebra::Point3;
 use super::*;
 use crate::ObjectId;
 use crate::field::{AdamWConfig, FieldBatch, OBJECT_HIDDEN, OccupancyField, RaySamplerConfig, sample_training_rays};
-use crate::objects::hidden_space::{CellRules, FreeCells, HiddenCells};
+use crate::objects::hidden_space::{CellRules, FreeCells, HiddenCells, UnseenCells};
 use crate::objects::view_fixtures::{bed_on_the_floor, bed_views};
 use crate::rng::{RngStream, seeded_rng};
 
@@ -21,6 +21,7 @@ fn trained(free: FreeCells) -> (OccupancyField, Point3<f32>) {
     let views: Vec<&ObjectView> = views.iter().collect();
     let rules = CellRules {
         hidden: HiddenCells::Enclosed,
+        unseen: UnseenCells::Unknown,
         free,
     };
     let space = HiddenSpace::of_views(&views, &bed_box, None, rules);

@@ -85,6 +85,28 @@ impl EvidenceGrid {
             })
     }
 
+    /// Makes every unknown cell under the object hidden: one whose column holds, above it and
+    /// with only unknown cells between, a cell at the object's surface or hidden behind it.
+    pub(super) fn hide_unseen_under_the_object(&mut self) {
+        let n = self.n;
+        for j in 0..n {
+            for i in 0..n {
+                let mut under_the_object = false;
+                for k in (0..n).rev() {
+                    let at = (k * n + j) * n + i;
+                    match self.evidence[at] {
+                        CellEvidence::Surface | CellEvidence::Hidden => under_the_object = true,
+                        CellEvidence::Unknown if under_the_object => self.evidence[at] = CellEvidence::Hidden,
+                        CellEvidence::Unknown => {}
+                        CellEvidence::SeenFree | CellEvidence::Occluded | CellEvidence::Glimpsed => {
+                            under_the_object = false
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// Whether hidden cell (i, j, k) opens sideways onto space that may be empty: a walk ends at
     /// a cell seen free, glimpsed, or occluded (not at the object's surface or an unknown cell).
     pub(super) fn open_sideways(&self, i: usize, j: usize, k: usize) -> bool {

@@ -42,6 +42,8 @@ use crate::geometry::mirror_symmetry::MirrorPlane;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::ids::FrameIndex;
 
+pub use super::cell_rules::{CellRules, FreeCells, HiddenCells, UnseenCells};
+
 /// Cells along each edge of the box.
 pub const CELLS_PER_AXIS: usize = 16;
 
@@ -60,50 +62,6 @@ pub const FREE_DRAW_TRIES: usize = 4;
 /// How far from the object's surface, as a view sees it, a free draw must lie, metres of camera
 /// depth.
 pub const FREE_CLEARANCE_M: f32 = 0.03;
-
-/// Which hidden cells the solid prior asks to be solid.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum HiddenCells {
-    /// Every hidden cell.
-    All,
-    /// Hidden cells enclosed sideways: walking from the cell along box x or y (both ways)
-    /// through hidden cells, no walk ends at a cell seen free or occluded. Space under a
-    /// tabletop opens sideways onto space seen between its legs or hidden by the chairs under
-    /// it; the inside of a carcass seen from behind ends at its observed panels or at the
-    /// box's faces.
-    #[default]
-    Enclosed,
-}
-
-/// Which cells the seen-free prior asks to be empty.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum FreeCells {
-    /// The cells a view saw free.
-    Seen,
-    /// Those, and the hidden cells open sideways onto space a view saw through under the object
-    /// (a walk along box x or y through hidden cells ends at a cell seen free or glimpsed with
-    /// the object above it: its observed surface, or space hidden behind it).
-    SeenAndOpen,
-    /// Those, and the cells of the ring one cell thick around the box's sides and top that no
-    /// view saw free and none saw at the object's surface or behind another object — hidden
-    /// behind the object, or glimpsed — and whose mirror image (with a plane) is not in the box:
-    /// the region the object is meshed in reaches 0.9 cell past the box, and a field left to
-    /// itself fills it behind a sofa against a wall up to the wall. The box is where the object
-    /// was seen to end (its mirror image where it was seen to continue).
-    #[default]
-    SeenOpenAndBeyond,
-}
-
-/// The rules that pick the priors' cells: the solid prior's and the seen-free prior's.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct CellRules {
-    /// Which hidden cells the solid prior takes.
-    pub hidden: HiddenCells,
-    /// Which cells the seen-free prior takes.
-    pub free: FreeCells,
-}
 
 /// The hidden cells of one object's box, ready to draw prior samples from.
 #[derive(Debug, Clone, PartialEq)]
@@ -148,7 +106,10 @@ impl HiddenSpace {
                 }
             }
         }
-        let grid = EvidenceGrid { n, evidence };
+        let mut grid = EvidenceGrid { n, evidence };
+        if rules.unseen == UnseenCells::HiddenUnderTheObject {
+            grid.hide_unseen_under_the_object();
+        }
         let (mut centres, mut free_centres, mut open_centres) = (Vec::new(), Vec::new(), Vec::new());
         for k in 0..n {
             for j in 0..n {

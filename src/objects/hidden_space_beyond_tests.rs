@@ -34,6 +34,7 @@ fn the_hidden_gap_behind_a_sofa_beyond_its_box_is_drawn_empty_unless_its_mirror_
     let views: Vec<&ObjectView> = views.iter().collect();
     let rules = CellRules {
         hidden: HiddenCells::Enclosed,
+        unseen: UnseenCells::Unknown,
         free: FreeCells::SeenOpenAndBeyond,
     };
     let space = HiddenSpace::of_views(&views, &sofa_box, None, rules);

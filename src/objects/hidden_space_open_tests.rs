@@ -34,6 +34,7 @@ fn the_floor_glimpsed_under_a_frame_opens_the_gap_and_only_the_gap() {
     };
     let open = CellRules {
         hidden: HiddenCells::Enclosed,
+        unseen: UnseenCells::Unknown,
         free: FreeCells::SeenAndOpen,
     };
     let space = HiddenSpace::of_views(&views, &bed_box, None, open);
@@ -93,6 +94,7 @@ fn space_seen_beside_the_object_does_not_open_its_inside() {
         None,
         CellRules {
             hidden: HiddenCells::Enclosed,
+            unseen: UnseenCells::Unknown,
             free: FreeCells::SeenAndOpen,
         },
     );
@@ -142,6 +144,7 @@ fn the_gap_under_a_body_seen_under_its_front_edge_opens_to_its_back() {
     let views: Vec<&ObjectView> = views.iter().collect();
     let rules = CellRules {
         hidden: HiddenCells::Enclosed,
+        unseen: UnseenCells::Unknown,
         free: FreeCells::SeenAndOpen,
     };
     let space = HiddenSpace::of_views(&views, &sofa_box, None, rules);

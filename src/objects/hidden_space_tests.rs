@@ -10,12 +10,14 @@ use crate::rng::{RngStream, seeded_rng};
 /// cells).
 pub(super) const ALL: CellRules = CellRules {
     hidden: HiddenCells::All,
+    unseen: UnseenCells::Unknown,
     free: FreeCells::Seen,
 };
 
 /// Enclosed hidden cells solid, free draws around the cells seen free only.
 pub(super) const ENCLOSED: CellRules = CellRules {
     hidden: HiddenCells::Enclosed,
+    unseen: UnseenCells::Unknown,
     free: FreeCells::Seen,
 };
 
@@ -218,6 +220,7 @@ fn under_an_overhang_open_sideways_only_enclosed_cells_stay_hidden() {
         None,
         CellRules {
             hidden: HiddenCells::Enclosed,
+            unseen: UnseenCells::Unknown,
             free: FreeCells::SeenAndOpen,
         },
     );
@@ -290,4 +293,55 @@ fn the_cache_recomputes_when_the_box_changes_and_only_then() {
     assert_ne!(second, first, "a new box, a new space");
     assert_eq!(second, HiddenSpace::of_views(&[&front], &shallower, None, ALL));
     assert_eq!(*cache.current(&[&front], &object_box, None, ALL), first);
+}
+
+#[test]
+fn cells_no_view_saw_under_the_object_are_hidden_under_the_unseen_rule_only() {
+    // A storage box (the object) the camera passes close by, looking down: the far part of its
+    // top is in the frame, its front and the lower part of what lies under the top fall below
+    // the frame's lower edge.
+    let object_box = aabb([-0.25, 1.0, 0.0], [0.25, 1.4, 0.35]);
+    let scene = [Solid {
+        aabb: object_box,
+        is_object: true,
+    }];
+    let view = render_pitched([0.0, 0.6, 1.2], 0.0, -0.3, &scene);
+    let margin = 0.03;
+    assert_eq!(
+        cell_evidence(&[&view], &Point3::new(0.0, 1.3, 0.25), margin),
+        CellEvidence::Hidden
+    );
+    assert_eq!(
+        cell_evidence(&[&view], &Point3::new(0.0, 1.3, 0.05), margin),
+        CellEvidence::Unknown
+    );
+    assert_eq!(
+        cell_evidence(&[&view], &Point3::new(0.0, 1.05, 0.34), margin),
+        CellEvidence::Unknown,
+        "the front's top is out of the frame too"
+    );
+    let under = |rules: CellRules, y: std::ops::Range<f32>| {
+        let space = HiddenSpace::of_views(&[&view], &object_box, None, rules);
+        let world: Vec<Point3<f32>> = space.centres.iter().map(|c| space.world_from_box * c).collect();
+        world.iter().filter(|p| p.z < 0.1 && y.contains(&p.y)).count()
+    };
+    let unseen_hidden = CellRules {
+        unseen: UnseenCells::HiddenUnderTheObject,
+        ..ENCLOSED
+    };
+    assert_eq!(
+        under(ENCLOSED, 1.25..1.35),
+        0,
+        "unknown cells are not hidden by default rules"
+    );
+    assert!(
+        under(unseen_hidden, 1.25..1.35) >= 16,
+        "{} low cells under the seen top",
+        under(unseen_hidden, 1.25..1.35)
+    );
+    assert_eq!(
+        under(unseen_hidden, 1.0..1.1),
+        0,
+        "a column no view reached at any height has nothing of the object above it"
+    );
 }

@@ -3,6 +3,7 @@
 
 pub mod border_votes;
 pub mod cell_evidence;
+pub mod cell_rules;
 pub mod config;
 pub mod frame_observation;
 pub mod hidden_space;

@@ -11,7 +11,7 @@ use catmap::categories::member_hidden::{
 };
 use catmap::field::{RaySamplerConfig, sample_member_rays};
 use catmap::meshing::ObjectMeshConfig;
-use catmap::objects::hidden_space::HiddenCells;
+use catmap::objects::hidden_space::{CellRules, FreeCells};
 use catmap::objects::object_view::ObjectView;
 use rayon::prelude::*;
 
@@ -97,7 +97,11 @@ pub fn train_category_fields(
     let meshing = &config.meshes.object;
     let prior = MemberPrior {
         solid_rays: config.member_solid_rays(),
-        hidden: config.object_rays().hidden_cells,
+        cells: CellRules {
+            hidden: config.object_rays().hidden_cells,
+            unseen: config.category_fields.unseen_cells,
+            free: FreeCells::Seen,
+        },
         min_share: config.category_fields.min_hidden_share,
     };
     for _ in 0..pending {
@@ -144,7 +148,7 @@ fn sample_members(
             .collect();
         let slots: Vec<usize> = work.iter().map(|(_, field_slot, ..)| field_slot.index).collect();
         let caches = caches_of(caches, &slots);
-        shared = hidden_in_every_member_of_fields(&cells, caches, prior.hidden, prior.min_share);
+        shared = hidden_in_every_member_of_fields(&cells, caches, prior.cells, prior.min_share);
     }
     shared.resize(work.len(), None);
     work.par_iter_mut()
@@ -179,12 +183,12 @@ fn caches_of<'c>(caches: &'c mut Vec<MemberHiddenCache>, slots: &[usize]) -> Vec
         .collect()
 }
 
-/// The members' solid prior: rays per member and step, which hidden cells it takes, and the
-/// share of its box the cells no member saw into must make up.
+/// The members' solid prior: rays per member and step, which hidden and unseen cells it takes,
+/// and the share of its box the cells no member saw into must make up.
 #[derive(Debug, Clone, Copy)]
 struct MemberPrior {
     solid_rays: usize,
-    hidden: HiddenCells,
+    cells: CellRules,
     min_share: f64,
 }
 
