@@ -62,14 +62,14 @@ pub const OWN_PIXEL_TRIES: usize = 16;
 /// With `hidden` (a cache and the box fitted to the object's observed cloud: an object alone in
 /// its class), `own_pixel_draws` of each keyframe's pixels are drawn among the object's own, and
 /// `hidden_solid_rays` prior rays follow, drawn in the cells of that box no view saw into (the
-/// cache is brought up to date first), and with a `mirror` plane too, `mirror_rays` keyframe
-/// rays reflected across it.
+/// cache is brought up to date first), and for each of its `mirror` planes (the best first)
+/// `mirror_rays` keyframe rays reflected across it.
 pub fn sample_window_rays(
     window: &KeyframeWindow<ObjectView>,
     field_origin: &Point3<f32>,
     object_box: Option<&OrientedBox>,
     hidden: Option<(&mut HiddenSpaceCache, &OrientedBox)>,
-    mirror: Option<&MirrorPlane>,
+    mirror: &[MirrorPlane],
     cfg: &RaySamplerConfig,
     rng: &mut impl Rng,
 ) -> RaySamples {
@@ -80,10 +80,12 @@ pub fn sample_window_rays(
     // default seed 2's chairs lost free space around them (completion 1.10 → 1.21 cm).
     let cfg = &cfg.with_own_pixel_draws(if hidden.is_some() { cfg.own_pixel_draws() } else { 0 });
     let mut rays = sample_training_rays(&views, recent, field_origin, object_box, cfg, rng);
-    if let Some(plane) = mirror.filter(|_| hidden.is_some() && cfg.mirror_rays() > 0) {
+    if hidden.is_some() && cfg.mirror_rays() > 0 {
         let mirrored_cfg = cfg.with_rays_per_step(cfg.mirror_rays());
-        let mirrored = sample_rays(&views, recent, field_origin, None, &mirrored_cfg, Some(plane), rng);
-        rays = rays.followed_by(mirrored).with_colour_rays_first();
+        for plane in mirror {
+            let mirrored = sample_rays(&views, recent, field_origin, None, &mirrored_cfg, Some(plane), rng);
+            rays = rays.followed_by(mirrored).with_colour_rays_first();
+        }
     }
     let counts = PriorRays {
         hidden_solid: cfg.solid_prior_rays(),
@@ -99,7 +101,7 @@ pub fn sample_window_rays(
             unseen: cfg.unseen_cells,
             free: cfg.free_cells,
         };
-        let space = cache.current(&views, fitted_box, mirror, rules);
+        let space = cache.current(&views, fitted_box, mirror.first(), rules);
         append_prior_rays(&mut rays, space, &views, counts, field_origin, rng);
     }
     rays
@@ -117,7 +119,7 @@ pub fn sample_member_rays(
     (cfg, solid_rays): (&RaySamplerConfig, usize),
     rng: &mut impl Rng,
 ) -> RaySamples {
-    let mut rays = sample_window_rays(window, field_origin, Some(meshed_box), None, None, cfg, rng);
+    let mut rays = sample_window_rays(window, field_origin, Some(meshed_box), None, &[], cfg, rng);
     if let Some(space) = shared.filter(|_| solid_rays > 0) {
         let views: Vec<&ObjectView> = window.slots().iter().map(|s| &s.data).collect();
         let counts = PriorRays {

@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::objects::hidden_space::{FreeCells, HiddenCells, UnseenCells};
+use crate::objects::object_bounds::MirrorPlanes;
 
 /// How one field's rays are drawn for a training step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -57,6 +58,9 @@ pub struct RaySamplerConfig {
     /// surface point a view saw free. `None`: the schedule's choice
     /// ([`RaySamplerConfig::mirror_rays`]); 0: none.
     pub mirror_rays: Option<usize>,
+    /// Which of the object's vertical mirror planes its rays are reflected across
+    /// (`mirror_rays` across each).
+    pub mirror_planes: MirrorPlanes,
     /// Weight of the priors' loss (mean over their samples of −ln o, or −ln(1 − o) under the box).
     pub hidden_solid_weight: f32,
 }
@@ -86,6 +90,7 @@ impl RaySamplerConfig {
         seen_free_rays: None,
         free_cells: FreeCells::SeenOpenAndBeyond,
         mirror_rays: None,
+        mirror_planes: MirrorPlanes::BothWhenFound,
         hidden_solid_weight: 1.0,
     };
 
@@ -106,6 +111,7 @@ impl RaySamplerConfig {
         seen_free_rays: None,
         free_cells: FreeCells::SeenAndOpen,
         mirror_rays: None,
+        mirror_planes: MirrorPlanes::BothWhenFound,
         hidden_solid_weight: 1.0,
     };
 

@@ -404,7 +404,7 @@ fn own_pixel_draws_put_rays_on_a_thin_object_that_the_box_draws_rarely_hit() {
             .map(|seed| {
                 let hidden = alone.then_some((&mut cache, &post_box));
                 let mut rng = ChaCha8Rng::seed_from_u64(seed);
-                let rays = sample_window_rays(&window, &Point3::origin(), None, hidden, None, &cfg, &mut rng);
+                let rays = sample_window_rays(&window, &Point3::origin(), None, hidden, &[], &cfg, &mut rng);
                 rays.states.iter().filter(|s| **s == PixelState::ThisObject).count()
             })
             .sum();

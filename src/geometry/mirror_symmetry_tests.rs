@@ -135,3 +135,54 @@ fn a_flat_panel_is_not_symmetric_about_its_own_plane() {
         &MirrorPlane::vertical(0.0, 0.39),
     );
 }
+
+/// A dining table in its own frame (symmetric about x = 0 and y = 0): a 1.6 × 0.9 m top at
+/// 0.72–0.75 m, four legs and an apron under the top's edges.
+fn table() -> Vec<Point3<f32>> {
+    let step = 0.03;
+    let mut points = box_surface([0.0, 0.0, 0.735], [0.8, 0.45, 0.015], step);
+    for (x, y) in [(-0.73, -0.38), (-0.73, 0.38), (0.73, -0.38), (0.73, 0.38)] {
+        points.extend(box_surface([x, y, 0.36], [0.03, 0.03, 0.36], step));
+    }
+    points.extend(box_surface([0.0, -0.38, 0.67], [0.7, 0.01, 0.05], step));
+    points.extend(box_surface([0.0, 0.38, 0.67], [0.7, 0.01, 0.05], step));
+    points.extend(box_surface([-0.73, 0.0, 0.67], [0.01, 0.35, 0.05], step));
+    points.extend(box_surface([0.73, 0.0, 0.67], [0.01, 0.35, 0.05], step));
+    points
+}
+
+#[test]
+fn a_table_with_one_end_hidden_has_a_second_plane_at_right_angles_and_a_sofa_none() {
+    // A chair tucked under the table's −x end hides the apron there; the +x end's apron mirrors
+    // onto nothing, the rest onto the table.
+    let seen: Vec<Point3<f32>> = table()
+        .into_iter()
+        .filter(|p| !(p.x < -0.7 && p.y.abs() < 0.35 && p.z > 0.6 && p.z < 0.72))
+        .collect();
+    let (yaw, shift) = (0.5f32, [1.2, -0.7, 0.0]);
+    let points = placed(&seen, yaw, shift);
+    let (first, second) = find_vertical_mirrors(&points, &SymmetryConfig::default());
+    let at = |theta: f32| {
+        let n = Vector3::new(theta.cos(), theta.sin(), 0.0);
+        MirrorPlane::vertical(theta, n.dot(&Vector3::from(shift)))
+    };
+    let (ends, sides) = (at(yaw), at(yaw + std::f32::consts::FRAC_PI_2));
+    let (first, second) = (first.expect("a first plane"), second.expect("a second plane"));
+    let (long, short) = if first.plane.angle_to(&sides) < first.plane.angle_to(&ends) {
+        ((first, sides), (second, ends))
+    } else {
+        ((first, ends), (second, sides))
+    };
+    // Within the matching tolerance: the end plane may shift until the seen end's apron lands
+    // on the hidden end's legs.
+    assert_finds_within(Some(long.0), &long.1, 1f32.to_radians(), 0.025);
+    assert_finds_within(Some(short.0), &short.1, 1f32.to_radians(), 0.025);
+
+    // A sofa seen from the front is symmetric end to end, not front to back: its back's front
+    // face mirrors onto the seat's empty front.
+    let seen: Vec<Point3<f32>> = sofa().into_iter().filter(|p| p.y < 0.39 && p.z > 0.01).collect();
+    let sofa = placed(&seen, yaw, shift);
+    let (first, second) = find_vertical_mirrors(&sofa, &SymmetryConfig::default());
+    assert_finds(first, &at(yaw));
+    assert!(second.is_none(), "a sofa's back is not its front: {second:?}");
+}

@@ -3,7 +3,7 @@
 use nalgebra::Point3;
 
 use crate::error::{CatmapError, Result};
-use crate::geometry::mirror_symmetry::{MirrorPlane, SymmetryConfig, find_vertical_mirror};
+use crate::geometry::mirror_symmetry::{MirrorPlane, SymmetryConfig, find_vertical_mirrors};
 use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box};
 use crate::geometry::upright_box::{fit_upright_box, fit_upright_box_on_faces};
 use crate::objects::config::{BoxFit, ObjectConfig};
@@ -19,14 +19,42 @@ pub const MIN_POINTS_FOR_BOX: usize = 10;
 /// ends). The search costs tens of milliseconds; the box is refitted every 10 %.
 pub const MIRROR_REFRESH_GROWTH: f32 = 0.5;
 
-/// An object's vertical mirror plane as last searched for in its thinned cloud
-/// ([`crate::geometry::mirror_symmetry`]).
+/// An object's vertical mirror planes as last searched for in its thinned cloud
+/// ([`crate::geometry::mirror_symmetry::find_vertical_mirrors`]).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MirrorFit {
     /// The plane, if the cloud has one.
     pub plane: Option<MirrorPlane>,
+    /// A second plane at right angles to the first, if the cloud is symmetric about it too (a
+    /// table end to end as well as side to side).
+    #[serde(default)]
+    pub second: Option<MirrorPlane>,
     /// Cloud voxels at the search.
     pub fitted_at_points: usize,
+}
+
+/// Which of an object's vertical mirror planes ([`MirrorFit`]) its mirrored rays are reflected
+/// across.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MirrorPlanes {
+    /// The best plane only.
+    Best,
+    /// The best plane, and the one at right angles to it when the cloud is symmetric about that
+    /// too: a table whose one end a chair hides learns it from the other end.
+    #[default]
+    BothWhenFound,
+}
+
+impl MirrorFit {
+    /// The planes `which` asks for, of those found: the best first.
+    pub fn planes(&self, which: MirrorPlanes) -> Vec<MirrorPlane> {
+        let second = match which {
+            MirrorPlanes::Best => None,
+            MirrorPlanes::BothWhenFound => self.second.filter(|_| self.plane.is_some()),
+        };
+        self.plane.into_iter().chain(second).collect()
+    }
 }
 
 /// What a refit gives an object: its box, the cloud size it was fitted at, and its mirror plane.
@@ -146,10 +174,14 @@ pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &Object
     };
     let oriented_box = oriented_box.with_min_extent(cfg.min_extent_m);
     let mirror = match mirror {
-        MirrorStep::Search => Some(MirrorFit {
-            plane: find_vertical_mirror(&thinned, &SymmetryConfig::default()).map(|f| f.plane),
-            fitted_at_points: cloud.len(),
-        }),
+        MirrorStep::Search => {
+            let (first, second) = find_vertical_mirrors(&thinned, &SymmetryConfig::default());
+            Some(MirrorFit {
+                plane: first.map(|f| f.plane),
+                second: second.map(|f| f.plane),
+                fitted_at_points: cloud.len(),
+            })
+        }
         MirrorStep::Keep(kept) => kept,
     };
     Ok(FittedBounds {
@@ -164,6 +196,22 @@ mod tests {
     use nalgebra::Point3;
 
     use super::*;
+
+    #[test]
+    fn the_second_plane_is_used_only_when_asked_and_only_beside_a_first() {
+        let (first, second) = (MirrorPlane::vertical(0.0, 0.5), MirrorPlane::vertical(1.5, -0.2));
+        let fit = MirrorFit {
+            plane: Some(first),
+            second: Some(second),
+            fitted_at_points: 100,
+        };
+        assert_eq!(fit.planes(MirrorPlanes::BothWhenFound), vec![first, second]);
+        assert_eq!(fit.planes(MirrorPlanes::Best), vec![first]);
+        let alone = MirrorFit { plane: None, ..fit };
+        assert!(alone.planes(MirrorPlanes::BothWhenFound).is_empty());
+        let one = MirrorFit { second: None, ..fit };
+        assert_eq!(one.planes(MirrorPlanes::BothWhenFound), vec![first]);
+    }
 
     #[test]
     fn a_box_goes_stale_only_after_the_configured_growth() {
@@ -281,6 +329,7 @@ mod tests {
         // growth, though the box is refitted.
         let remembered = MirrorFit {
             plane: None,
+            second: None,
             fitted_at_points: (n as f32 / (1.0 + MIRROR_REFRESH_GROWTH)) as usize + 1,
         };
         let refit =

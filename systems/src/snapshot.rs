@@ -40,6 +40,9 @@ pub struct ObjectSnapshot {
     /// The cloud's vertical mirror plane, if one was found.
     #[serde(default)]
     pub mirror_plane: Option<catmap::geometry::mirror_symmetry::MirrorPlane>,
+    /// A second plane at right angles to the first, if the cloud is symmetric about it too.
+    #[serde(default)]
+    pub second_mirror_plane: Option<catmap::geometry::mirror_symmetry::MirrorPlane>,
 }
 
 /// The background as the mapper knows it.
@@ -107,6 +110,7 @@ impl MapSnapshot {
                     points: cloud.0.points(),
                     bounds: bounds.map(|b| b.oriented_box),
                     mirror_plane: bounds.and_then(|b| b.mirror?.plane),
+                    second_mirror_plane: bounds.and_then(|b| b.mirror?.second),
                 },
             )
             .collect();

@@ -38,6 +38,10 @@ pub struct ObjectRow {
     /// (`fields.object_rays.mirror_rays`).
     #[serde(default)]
     pub mirror_plane: Option<catmap::geometry::mirror_symmetry::MirrorPlane>,
+    /// A second plane at right angles to the first, if the cloud is symmetric about it too: its
+    /// rays are mirrored across it as well (`fields.object_rays.mirror_planes`).
+    #[serde(default)]
+    pub second_mirror_plane: Option<catmap::geometry::mirror_symmetry::MirrorPlane>,
 }
 
 /// What a run did and how long each stage took.
@@ -155,6 +159,7 @@ impl RunSummary {
                 box_extents_m: o.bounds.map(|b| b.extents().into()),
                 bounds: o.bounds,
                 mirror_plane: o.mirror_plane,
+                second_mirror_plane: o.second_mirror_plane,
             })
             .collect();
         let mut objects_per_class = BTreeMap::new();
@@ -261,6 +266,7 @@ mod tests {
             box_extents_m: None,
             bounds: None,
             mirror_plane: None,
+            second_mirror_plane: None,
         }
     }
 

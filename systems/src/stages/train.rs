@@ -191,7 +191,10 @@ fn train_one(
             let class_size = |o: &Object| class_sizes.get(&o.id).copied().unwrap_or(1);
             let priors = object.is_some_and(|o| takes_shape_priors(class_size(o)));
             let fitted_box = bounds.filter(|_| priors).map(|b| b.oriented_box);
-            let mirror = bounds.filter(|_| priors).and_then(|b| b.mirror?.plane);
+            let mirror = bounds
+                .filter(|_| priors)
+                .and_then(|b| b.mirror)
+                .map(|m| m.planes(rays.mirror_planes));
             (keyframes, slot, rng, loss, (object_box, fitted_box, mirror))
         })
         .collect();
@@ -224,7 +227,7 @@ fn train_one(
                 &slot.origin,
                 object_box.as_ref(),
                 hidden,
-                mirror.as_ref(),
+                mirror.as_deref().unwrap_or_default(),
                 rays,
                 &mut rng.0,
             )
