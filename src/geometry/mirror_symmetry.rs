@@ -124,10 +124,10 @@ pub fn find_vertical_mirror(points: &[Point3<f32>], cfg: &SymmetryConfig) -> Opt
 
 /// The best vertical mirror plane of `points`, and the best one at right angles to it (within
 /// the refinement's few degrees), if their matched shares reach `cfg.min_matched` and
-/// `cfg.min_matched_second`: a table,
-/// a bed or a box is symmetric end to end as well as side to side, and a table seen from one
-/// side with a chair before one end shows the other end. An object symmetric about one plane
-/// only (a sofa: its back is not its front) finds none at right angles.
+/// `cfg.min_matched_second`: a table, a bed or a box is symmetric end to end as well as side to
+/// side, and a table seen from one side with a chair before one end shows the other end. An
+/// object symmetric about one plane only (a sofa: its back is not its front) finds none at
+/// right angles.
 pub fn find_vertical_mirrors(
     points: &[Point3<f32>],
     cfg: &SymmetryConfig,

@@ -11,7 +11,7 @@ use catmap::categories::member_hidden::{
 };
 use catmap::field::{RaySamplerConfig, sample_member_rays};
 use catmap::meshing::ObjectMeshConfig;
-use catmap::objects::hidden_space::{CellRules, FreeCells};
+use catmap::objects::hidden_space::CellRules;
 use catmap::objects::object_view::ObjectView;
 use rayon::prelude::*;
 
@@ -100,7 +100,8 @@ pub fn train_category_fields(
         cells: CellRules {
             hidden: config.object_rays().hidden_cells,
             unseen: config.category_fields.unseen_cells,
-            free: FreeCells::Seen,
+            // Members draw no seen-free cells: the library sets that rule itself.
+            ..CellRules::default()
         },
         min_share: config.category_fields.min_hidden_share,
     };
