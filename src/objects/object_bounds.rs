@@ -8,7 +8,7 @@ use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box};
 use crate::geometry::upright_box::{fit_upright_box, fit_upright_box_on_faces};
 use crate::objects::config::{BoxFit, ObjectConfig};
 use crate::objects::observed_cloud::{ObservedCloud, voxel_downsample};
-use crate::training::StreamPhase;
+use crate::training::{StreamPhase, takes_shape_priors};
 use rayon::prelude::*;
 
 /// Fewest cloud voxels an object needs before it gets a box.
@@ -69,19 +69,28 @@ pub struct FittedBounds {
     pub mirror: Option<MirrorFit>,
 }
 
-/// Whether refits search the cloud for a mirror plane.
+/// Whether refits search an object's cloud for a mirror plane.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MirrorSearch {
-    /// Search when the last search went stale (a sampler reflects rays across the plane).
+    /// Search when the last search went stale (the object's sampler reflects rays across the
+    /// plane).
     Search,
-    /// Keep what there is (no sampler uses a plane: the search would only cost time).
+    /// Keep what there is (no sampler uses the object's plane: the search would only cost time).
     Skip,
 }
 
 impl MirrorSearch {
-    /// Search when a sampler reflects rays across the plane (`mirror_rays` per step), else skip.
-    pub fn for_mirror_rays(mirror_rays: usize) -> Self {
-        if mirror_rays > 0 { Self::Search } else { Self::Skip }
+    /// Search for an object of a class of `class_size` objects (itself included) when the
+    /// sampler reflects rays across the plane (`mirror_rays` per step) and the object takes the
+    /// shape priors of objects alone in their class ([`takes_shape_priors`]), else skip: an
+    /// object with a twin never trains on its plane (a plane kept from before its twin appeared
+    /// stays, unused; one that loses its twin is searched at its next refit).
+    pub fn for_object(mirror_rays: usize, class_size: usize) -> Self {
+        if mirror_rays > 0 && takes_shape_priors(class_size) {
+            Self::Search
+        } else {
+            Self::Skip
+        }
     }
 }
 
@@ -103,30 +112,29 @@ pub fn box_is_stale(fitted_at: Option<usize>, current: usize, growth: f32) -> bo
 }
 
 /// Refits the boxes gone stale (see [`box_is_stale`]) among `objects` — each a key, the cloud
-/// size its box was fitted at (`None`: no box yet), its last mirror plane and its cloud — in
-/// parallel. Growth is `bounds_refresh_growth` while streaming and 0 once the stream has ended
+/// size its box was fitted at (`None`: no box yet), its last mirror plane, whether its plane is
+/// searched ([`MirrorSearch::for_object`]) and its cloud — in parallel. Growth is `bounds_refresh_growth` while streaming and 0 once the stream has ended
 /// (every grown box is refitted). A refitted object's mirror plane is searched again when its
 /// cloud has grown by [`MIRROR_REFRESH_GROWTH`] since the last search (0 once the stream has
 /// ended; never under [`MirrorSearch::Skip`]). Returns, in input order, each stale object's key
 /// and its new bounds, or why it has none yet.
 pub fn refit_stale_boxes<'a, K: Send>(
-    objects: impl IntoIterator<Item = (K, Option<usize>, Option<MirrorFit>, &'a ObservedCloud)>,
+    objects: impl IntoIterator<Item = (K, Option<usize>, Option<MirrorFit>, MirrorSearch, &'a ObservedCloud)>,
     phase: StreamPhase,
-    mirror_search: MirrorSearch,
     cfg: &ObjectConfig,
 ) -> Vec<(K, Result<FittedBounds>)> {
     let (growth, mirror_growth) = match phase {
         StreamPhase::Streaming => (cfg.bounds_refresh_growth, MIRROR_REFRESH_GROWTH),
         StreamPhase::Ended => (0.0, 0.0),
     };
-    let stale: Vec<(K, Option<MirrorFit>, &ObservedCloud)> = objects
+    let stale: Vec<(K, Option<MirrorFit>, MirrorSearch, &ObservedCloud)> = objects
         .into_iter()
-        .filter(|(_, fitted_at, _, cloud)| box_is_stale(*fitted_at, cloud.len(), growth))
-        .map(|(key, _, mirror, cloud)| (key, mirror, cloud))
+        .filter(|(_, fitted_at, _, _, cloud)| box_is_stale(*fitted_at, cloud.len(), growth))
+        .map(|(key, _, mirror, search, cloud)| (key, mirror, search, cloud))
         .collect();
     stale
         .into_par_iter()
-        .map(|(key, mirror, cloud)| {
+        .map(|(key, mirror, mirror_search, cloud)| {
             let stale = mirror.is_none_or(|m| box_is_stale(Some(m.fitted_at_points), cloud.len(), mirror_growth));
             let step = match mirror_search {
                 MirrorSearch::Search if stale => MirrorStep::Search,
@@ -279,12 +287,12 @@ mod tests {
         let cfg = ObjectConfig::default();
         let objects = || {
             [
-                ("new", None, None, &cloud),
-                ("fresh", Some(n), None, &cloud),
-                ("grown", Some(n - 1), None, &cloud),
+                ("new", None, None, MirrorSearch::Search, &cloud),
+                ("fresh", Some(n), None, MirrorSearch::Search, &cloud),
+                ("grown", Some(n - 1), None, MirrorSearch::Search, &cloud),
             ]
         };
-        let streaming = refit_stale_boxes(objects(), StreamPhase::Streaming, MirrorSearch::Search, &cfg);
+        let streaming = refit_stale_boxes(objects(), StreamPhase::Streaming, &cfg);
         let keys: Vec<&str> = streaming.iter().map(|(k, _)| *k).collect();
         assert_eq!(keys, vec!["new"], "one more point is less than the growth");
         let fitted = streaming[0].1.as_ref().expect("enough points");
@@ -292,14 +300,13 @@ mod tests {
             (fitted.oriented_box, fitted.fitted_at_points),
             (fit_object_box(&cloud, &cfg).expect("enough points"), n)
         );
-        let ended = refit_stale_boxes(objects(), StreamPhase::Ended, MirrorSearch::Search, &cfg);
+        let ended = refit_stale_boxes(objects(), StreamPhase::Ended, &cfg);
         let keys: Vec<&str> = ended.iter().map(|(k, _)| *k).collect();
         assert_eq!(keys, vec!["new", "grown"]);
         let few = ObservedCloud::new(0.01);
         let none = refit_stale_boxes(
-            [("empty", Some(0), None, &few)],
+            [("empty", Some(0), None, MirrorSearch::Search, &few)],
             StreamPhase::Ended,
-            MirrorSearch::Search,
             &cfg,
         );
         assert!(none.is_empty(), "a cloud that did not grow keeps its box");
@@ -333,7 +340,7 @@ mod tests {
             fitted_at_points: (n as f32 / (1.0 + MIRROR_REFRESH_GROWTH)) as usize + 1,
         };
         let refit =
-            |mirror, phase, search| refit_stale_boxes([("a", Some(1), Some(mirror), &cloud)], phase, search, &cfg);
+            |mirror, phase, search| refit_stale_boxes([("a", Some(1), Some(mirror), search, &cloud)], phase, &cfg);
         let streaming = refit(remembered, StreamPhase::Streaming, MirrorSearch::Search);
         assert_eq!(streaming[0].1.as_ref().expect("fitted").mirror, Some(remembered));
         let ended = refit(remembered, StreamPhase::Ended, MirrorSearch::Search);
@@ -352,13 +359,24 @@ mod tests {
             fitted.mirror,
             "grown past the growth"
         );
-        assert_eq!(MirrorSearch::for_mirror_rays(24), MirrorSearch::Search);
-        assert_eq!(MirrorSearch::for_mirror_rays(0), MirrorSearch::Skip);
-        let skipped = refit(older, StreamPhase::Ended, MirrorSearch::for_mirror_rays(0));
+        assert_eq!(MirrorSearch::for_object(24, 1), MirrorSearch::Search);
+        assert_eq!(MirrorSearch::for_object(0, 1), MirrorSearch::Skip);
+        assert_eq!(
+            MirrorSearch::for_object(24, 2),
+            MirrorSearch::Skip,
+            "an object with a twin"
+        );
+        let skipped = refit(older, StreamPhase::Ended, MirrorSearch::for_object(0, 1));
         assert_eq!(
             skipped[0].1.as_ref().expect("fitted").mirror,
             Some(older),
             "no search without mirrored rays"
+        );
+        let twin = refit(older, StreamPhase::Ended, MirrorSearch::for_object(24, 3));
+        assert_eq!(
+            twin[0].1.as_ref().expect("fitted").mirror,
+            Some(older),
+            "no search for an object with twins"
         );
     }
 }

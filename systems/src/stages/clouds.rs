@@ -3,9 +3,10 @@
 use bevy_ecs::prelude::*;
 use catmap::ids::ObjectId;
 use catmap::objects::object_bounds::{MirrorSearch, refit_stale_boxes};
+use catmap::training::class_sizes;
 use rayon::prelude::*;
 
-use crate::components::{Background, CameraFrame, FrameObservations, Object, ObjectBounds, ObjectCloud};
+use crate::components::{Background, CameraFrame, Category, FrameObservations, Object, ObjectBounds, ObjectCloud};
 use crate::resources::{Settings, StageTimes, StreamProgress};
 
 /// Back-projects each object's masked depth pixels of the new frames into its cloud, the frame
@@ -47,29 +48,32 @@ pub fn accumulate_clouds(
 }
 
 /// Refits the oriented box of every object whose cloud has grown by more than
-/// `bounds_refresh_growth` since its last fit, and of every grown one when the stream ends
-/// (`catmap::objects::object_bounds::refit_stale_boxes`; results written back in query order).
+/// `bounds_refresh_growth` since its last fit, and of every grown one when the stream ends; the
+/// mirror plane only of objects whose sampler reflects rays across it (`MirrorSearch::for_object`:
+/// alone in their class) (`catmap::objects::object_bounds::refit_stale_boxes`; results written
+/// back in query order).
 pub fn refresh_object_bounds(
     settings: Res<Settings>,
     progress: Res<StreamProgress>,
     mut objects: Query<(Entity, &Object, &ObjectCloud, Option<&mut ObjectBounds>)>,
+    categories: Query<&Category>,
     mut times: ResMut<StageTimes>,
     mut commands: Commands,
 ) {
     let _timer = times.start("bounds");
+    let class_sizes = class_sizes(categories.iter().map(|c| &c.members[..]));
+    let mirror_rays = settings.0.object_rays().mirror_rays();
     let clouds = objects.iter().map(|(entity, object, cloud, bounds)| {
-        let mirror = bounds.and_then(|b| b.mirror);
+        let class_size = class_sizes.get(&object.id).copied().unwrap_or(1);
         (
             (entity, object.id),
             bounds.map(|b| b.fitted_at_points),
-            mirror,
+            bounds.and_then(|b| b.mirror),
+            MirrorSearch::for_object(mirror_rays, class_size),
             &cloud.0,
         )
     });
-    let mirror_search = MirrorSearch::for_mirror_rays(settings.0.object_rays().mirror_rays());
-    for ((entity, id), fitted) in
-        refit_stale_boxes(clouds, progress.phase(), mirror_search, &settings.0.object_settings())
-    {
+    for ((entity, id), fitted) in refit_stale_boxes(clouds, progress.phase(), &settings.0.object_settings()) {
         let fitted = match fitted {
             Ok(fitted) => ObjectBounds {
                 oriented_box: fitted.oriented_box,
