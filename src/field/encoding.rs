@@ -124,10 +124,12 @@ pub(crate) fn sincos_pi<S: Simd>(simd: S, t: S::f32s) -> (S::f32s, S::f32s) {
     (simd.mul_f32s(sin, sign), simd.mul_f32s(cp, sign))
 }
 
-/// Adds this chunk's gradient of `B` to `grad_b` (21 × 3, row-major).
+/// Adds this chunk's gradient of `B` to `grad_b` (21 × 3, row-major), with `backend`'s
+/// instructions (no sum is reordered or fused, so every lane width gives the same bits).
 ///
 /// `d_geo` (`[n × geo_ld]`) holds ∂L/∂emb[..87] and `d_col` (`[n × col_ld]`) ∂L/∂emb[87..].
 pub(crate) fn backward_chunk(
+    backend: Backend,
     emb: &[f32],
     dsin: &[f32],
     d_geo: &[f32],
@@ -137,32 +139,58 @@ pub(crate) fn backward_chunk(
     n: usize,
     grad_b: &mut [f32],
 ) {
-    let geo_sines = GEO_DIMS - 3;
-    let geo_bands = geo_sines / NUM_DIRECTIONS;
-    for s in 0..n {
-        let ds = &dsin[s * TRIG_LD..][..SIN_DIMS];
-        let dg = &d_geo[s * geo_ld + 3..][..geo_sines];
-        let dc = &d_col[s * col_ld..][..COL_DIMS];
-        let xs = &emb[s * EMB_LD..][..3];
-        // Sine i = band·21 + direction; the first bands feed geometry, the rest colour. Band by
-        // band, so that the 21-wide products vectorise.
-        let mut dproj = [0.0f32; NUM_DIRECTIONS];
-        for (band, dsb) in ds.chunks_exact(NUM_DIRECTIONS).enumerate() {
-            let de = if band < geo_bands {
-                &dg[band * NUM_DIRECTIONS..][..NUM_DIRECTIONS]
-            } else {
-                &dc[(band - geo_bands) * NUM_DIRECTIONS..][..NUM_DIRECTIONS]
-            };
-            for ((acc, a), b) in dproj.iter_mut().zip(dsb).zip(de) {
-                *acc += a * b;
+    struct BackwardChunk<'a> {
+        emb: &'a [f32],
+        dsin: &'a [f32],
+        d_geo: &'a [f32],
+        geo_ld: usize,
+        d_col: &'a [f32],
+        col_ld: usize,
+        n: usize,
+        grad_b: &'a mut [f32],
+    }
+    impl WithSimd for BackwardChunk<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn with_simd<S: Simd>(self, _simd: S) {
+            let geo_sines = GEO_DIMS - 3;
+            let geo_bands = geo_sines / NUM_DIRECTIONS;
+            for s in 0..self.n {
+                let ds = &self.dsin[s * TRIG_LD..][..SIN_DIMS];
+                let dg = &self.d_geo[s * self.geo_ld + 3..][..geo_sines];
+                let dc = &self.d_col[s * self.col_ld..][..COL_DIMS];
+                let xs = &self.emb[s * EMB_LD..][..3];
+                // Sine i = band·21 + direction; the first bands feed geometry, the rest colour.
+                // Band by band, so that the 21-wide products vectorise.
+                let mut dproj = [0.0f32; NUM_DIRECTIONS];
+                for (band, dsb) in ds.chunks_exact(NUM_DIRECTIONS).enumerate() {
+                    let de = if band < geo_bands {
+                        &dg[band * NUM_DIRECTIONS..][..NUM_DIRECTIONS]
+                    } else {
+                        &dc[(band - geo_bands) * NUM_DIRECTIONS..][..NUM_DIRECTIONS]
+                    };
+                    for ((acc, a), b) in dproj.iter_mut().zip(dsb).zip(de) {
+                        *acc += a * b;
+                    }
+                }
+                for (g, dp) in self.grad_b.chunks_exact_mut(3).zip(&dproj) {
+                    g[0] += dp * xs[0];
+                    g[1] += dp * xs[1];
+                    g[2] += dp * xs[2];
+                }
             }
         }
-        for (g, dp) in grad_b.chunks_exact_mut(3).zip(&dproj) {
-            g[0] += dp * xs[0];
-            g[1] += dp * xs[1];
-            g[2] += dp * xs[2];
-        }
     }
+    backend.dispatch(BackwardChunk {
+        emb,
+        dsin,
+        d_geo,
+        geo_ld,
+        d_col,
+        col_ld,
+        n,
+        grad_b,
+    });
 }
 
 #[cfg(test)]

@@ -222,7 +222,7 @@ impl CategoryNet {
             Post::Identity,
         );
         let gb = &mut grad[self.b_grad..self.b_grad + 3 * encoding_rows()];
-        encoding::backward_chunk(&s.emb, &s.dsin, &s.d_geo, gp, &s.d_col, cp, n, gb);
+        encoding::backward_chunk(backend, &s.emb, &s.dsin, &s.d_geo, gp, &s.d_col, cp, n, gb);
         losses
     }
 
