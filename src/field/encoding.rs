@@ -204,6 +204,29 @@ mod tests {
     }
 
     #[test]
+    fn the_encoding_gradient_has_the_same_bits_on_every_backend() {
+        // Rows of pseudo-random values; the scalar arm is the reference.
+        let n = 37;
+        let value = |i: usize| ((i * 7919 % 1000) as f32 - 500.0) * 1e-3;
+        let emb: Vec<f32> = (0..n * EMB_LD).map(value).collect();
+        let dsin: Vec<f32> = (0..n * TRIG_LD).map(|i| value(i + 11)).collect();
+        let (geo_ld, col_ld) = (GEO_DIMS + 5, COL_DIMS + 6);
+        let d_geo: Vec<f32> = (0..n * geo_ld).map(|i| value(i + 23)).collect();
+        let d_col: Vec<f32> = (0..n * col_ld).map(|i| value(i + 47)).collect();
+        let run = |backend: Backend| {
+            let mut grad_b = vec![0.25f32; NUM_DIRECTIONS * 3];
+            backward_chunk(backend, &emb, &dsin, &d_geo, geo_ld, &d_col, col_ld, n, &mut grad_b);
+            grad_b
+        };
+        let reference = run(Backend::Scalar);
+        assert!(reference.iter().any(|&g| g != 0.25), "the gradient moved");
+        for backend in Backend::all_available() {
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+            assert_eq!(bits(&run(backend)), bits(&reference), "{}", backend.name());
+        }
+    }
+
+    #[test]
     fn sincos_matches_f64_on_every_backend() {
         let backends = Backend::all_available();
         println!("SIMD paths run: {}", Backend::describe_all(&backends));
