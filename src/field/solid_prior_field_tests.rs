@@ -14,8 +14,9 @@ use crate::rng::{RngStream, seeded_rng};
 const STEPS: usize = 400;
 
 /// The bed's field after [`STEPS`] steps on its three views, with 8 solid-prior and 8 seen-free
-/// rays per step drawn by `free`'s rule; the field's origin.
-fn trained(free: FreeCells) -> (OccupancyField, Point3<f32>) {
+/// rays per step drawn by `free`'s rule and `below_support` support-prior rays; the field's
+/// origin.
+fn trained(free: FreeCells, below_support: usize) -> (OccupancyField, Point3<f32>) {
     let (scene, bed_box) = bed_on_the_floor();
     let views = bed_views(&scene);
     let views: Vec<&ObjectView> = views.iter().collect();
@@ -32,7 +33,7 @@ fn trained(free: FreeCells) -> (OccupancyField, Point3<f32>) {
     let cfg = RaySamplerConfig::OBJECT.with_default_carving(3);
     let counts = PriorRays {
         hidden_solid: 8,
-        below_support: 0,
+        below_support,
         seen_free: 8,
         weight: 1.0,
     };
@@ -58,8 +59,8 @@ fn the_open_cells_free_draws_empty_the_gap_under_a_bed_and_keep_its_frame() {
     };
     let gap: Vec<Point3<f32>> = [0.04, 0.08].into_iter().flat_map(grid).collect();
     let frame = grid(0.3);
-    let (seen, origin) = trained(FreeCells::Seen);
-    let (open, _) = trained(FreeCells::SeenAndOpen);
+    let (seen, origin) = trained(FreeCells::Seen, 0);
+    let (open, _) = trained(FreeCells::SeenAndOpen, 0);
     let (gap_seen, gap_open) = (
         mean_occupancy(&seen, &origin, &gap),
         mean_occupancy(&open, &origin, &gap),
@@ -75,5 +76,29 @@ fn the_open_cells_free_draws_empty_the_gap_under_a_bed_and_keep_its_frame() {
     assert!(
         frame_open > 0.8,
         "the frame's inside stays solid: {frame_seen} with the cells seen free, {frame_open} with the open cells too"
+    );
+}
+
+#[test]
+fn the_support_prior_empties_the_floor_under_a_bed_that_no_ray_reaches() {
+    // Under the bed's footprint, 2–5 cm below the floor's surface (z = 0): every view's ray
+    // stops at the frame or at the floor beside it, so only the support prior speaks of it.
+    let below: Vec<Point3<f32>> = [-0.02, -0.035, -0.05]
+        .into_iter()
+        .flat_map(|z| {
+            (0..11)
+                .flat_map(move |i| (0..15).map(move |j| Point3::new(-0.6 + 0.12 * i as f32, 1.2 + 0.11 * j as f32, z)))
+        })
+        .collect();
+    let (without, origin) = trained(FreeCells::SeenAndOpen, 0);
+    let (with, _) = trained(FreeCells::SeenAndOpen, 8);
+    let (o_without, o_with) = (
+        mean_occupancy(&without, &origin, &below),
+        mean_occupancy(&with, &origin, &below),
+    );
+    println!("occupancy under the floor: {o_without} without the support prior, {o_with} with it");
+    assert!(
+        o_with < 0.5 * o_without && o_with < 0.2,
+        "occupancy under the floor: {o_without} without the support prior, {o_with} with it"
     );
 }
