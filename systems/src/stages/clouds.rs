@@ -64,12 +64,11 @@ pub fn refresh_object_bounds(
     let class_sizes = class_sizes(categories.iter().map(|c| &c.members[..]));
     let mirror_rays = settings.0.object_rays().mirror_rays();
     let clouds = objects.iter().map(|(entity, object, cloud, bounds)| {
-        let class_size = class_sizes.get(&object.id).copied().unwrap_or(1);
         (
             (entity, object.id),
             bounds.map(|b| b.fitted_at_points),
             bounds.and_then(|b| b.mirror),
-            MirrorSearch::for_object(mirror_rays, class_size),
+            MirrorSearch::for_object(mirror_rays, class_sizes.get(&object.id).copied().unwrap_or(1)),
             &cloud.0,
         )
     });
