@@ -113,8 +113,9 @@ pub fn box_is_stale(fitted_at: Option<usize>, current: usize, growth: f32) -> bo
 
 /// Refits the boxes gone stale (see [`box_is_stale`]) among `objects` — each a key, the cloud
 /// size its box was fitted at (`None`: no box yet), its last mirror plane, whether its plane is
-/// searched ([`MirrorSearch::for_object`]) and its cloud — in parallel. Growth is `bounds_refresh_growth` while streaming and 0 once the stream has ended
-/// (every grown box is refitted). A refitted object's mirror plane is searched again when its
+/// searched ([`MirrorSearch::for_object`]) and its cloud — in parallel. Growth is
+/// `bounds_refresh_growth` while streaming and 0 once the stream has ended (every grown box is
+/// refitted). A refitted object's mirror plane is searched again when its
 /// cloud has grown by [`MIRROR_REFRESH_GROWTH`] since the last search (0 once the stream has
 /// ended; never under [`MirrorSearch::Skip`]). Returns, in input order, each stale object's key
 /// and its new bounds, or why it has none yet.

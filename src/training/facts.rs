@@ -125,12 +125,25 @@ pub fn takes_shape_priors(class_size: usize) -> bool {
     class_size <= 1
 }
 
+/// Per object, the number of objects of its class.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ClassSizes(HashMap<ObjectId, usize>);
+
+impl ClassSizes {
+    /// The objects of `id`'s class, itself included; 1 for an object in no class (alone).
+    pub fn of(&self, id: ObjectId) -> usize {
+        self.0.get(&id).copied().unwrap_or(1)
+    }
+}
+
 /// Per object, the number of objects of its class, from each class's member list.
-pub fn class_sizes<'a>(classes: impl IntoIterator<Item = &'a [ObjectId]>) -> HashMap<ObjectId, usize> {
-    classes
-        .into_iter()
-        .flat_map(|members| members.iter().map(move |id| (*id, members.len())))
-        .collect()
+pub fn class_sizes<'a>(classes: impl IntoIterator<Item = &'a [ObjectId]>) -> ClassSizes {
+    ClassSizes(
+        classes
+            .into_iter()
+            .flat_map(|members| members.iter().map(move |id| (*id, members.len())))
+            .collect(),
+    )
 }
 
 /// Whether frames are still streaming in.
@@ -218,9 +231,10 @@ mod tests {
         let (chairs, lamp) = ([ObjectId(1), ObjectId(4)], [ObjectId(2)]);
         let sizes = super::class_sizes([&chairs[..], &lamp[..]]);
         assert_eq!(
-            (sizes[&ObjectId(1)], sizes[&ObjectId(4)], sizes[&ObjectId(2)]),
+            (sizes.of(ObjectId(1)), sizes.of(ObjectId(4)), sizes.of(ObjectId(2))),
             (2, 2, 1)
         );
+        assert_eq!(sizes.of(ObjectId(9)), 1, "an object in no class is alone");
     }
 
     use super::*;

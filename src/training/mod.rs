@@ -13,8 +13,8 @@ pub mod scheduler;
 
 pub use config::ScheduleConfig;
 pub use facts::{
-    ClassShare, FieldFacts, FieldKey, FieldRole, LastSeen, MeshSource, Sighting, StreamPhase, category_field_facts,
-    class_sizes, object_field_facts, takes_shape_priors,
+    ClassShare, ClassSizes, FieldFacts, FieldKey, FieldRole, LastSeen, MeshSource, Sighting, StreamPhase,
+    category_field_facts, class_sizes, object_field_facts, takes_shape_priors,
 };
 pub use field_progress::{FieldProgress, FieldState};
 pub use live_clock::{LiveClock, TickKind};

@@ -259,9 +259,7 @@ impl Mapper {
         let caches = &self.world.resource::<Fields>().hidden_spaces;
         owners
             .iter(&self.world)
-            .filter(|(object, _)| {
-                catmap::training::takes_shape_priors(class_sizes.get(&object.id).copied().unwrap_or(1))
-            })
+            .filter(|(object, _)| catmap::training::takes_shape_priors(class_sizes.of(object.id)))
             .filter_map(|(object, slot)| {
                 let space = caches.get(slot.index)?.latest()?;
                 Some((catmap::training::FieldKey::Object(object.id), space.cells()))

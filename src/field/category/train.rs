@@ -230,10 +230,6 @@ impl CategoryNet {
     /// it only where `y` (post-ReLU) is positive, giving ∂L/∂(y's pre-activation). Runs with
     /// `backend`'s instructions (the loop is element-wise, so every lane width gives the same
     /// bits; in baseline x86-64 code it took a seventh of a category run's time).
-    #[expect(
-        clippy::too_many_arguments,
-        reason = "one row loop of the backward pass, its buffers"
-    )]
     fn code_grad_and_mask(
         &self,
         backend: Backend,

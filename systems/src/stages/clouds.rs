@@ -68,7 +68,7 @@ pub fn refresh_object_bounds(
             (entity, object.id),
             bounds.map(|b| b.fitted_at_points),
             bounds.and_then(|b| b.mirror),
-            MirrorSearch::for_object(mirror_rays, class_sizes.get(&object.id).copied().unwrap_or(1)),
+            MirrorSearch::for_object(mirror_rays, class_sizes.of(object.id)),
             &cloud.0,
         )
     });

@@ -10,13 +10,13 @@ use catmap::rng::{RngStream, seeded_rng};
 use nalgebra::Point3;
 use rayon::prelude::*;
 
+use catmap::FrameIndex;
 use catmap::meshing::ObjectMeshConfig;
 use catmap::objects::hidden_space::HiddenSpaceCache;
 use catmap::training::{
-    BatchPlan, ClassShare, FieldFacts, MeshSource, StreamPhase, class_sizes, object_field_facts, takes_shape_priors,
+    BatchPlan, ClassShare, ClassSizes, FieldFacts, MeshSource, StreamPhase, class_sizes, object_field_facts,
+    takes_shape_priors,
 };
-use catmap::{FrameIndex, ObjectId};
-use std::collections::HashMap;
 
 use crate::components::{
     Background, CameraFrame, Category, CategorySlot, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Object,
@@ -135,7 +135,7 @@ pub fn train_fields(
         }
         if cfg.background_due(queue.steps_done) && !fields.background.is_empty() {
             let (plan, batch) = (BatchPlan::background(), (&mut fields.background, &mut Vec::new()));
-            let (rays, meshing) = ((&cfg.background_rays, &HashMap::new()), &config.meshes.object);
+            let (rays, meshing) = ((&cfg.background_rays, &ClassSizes::default()), &config.meshes.object);
             if let Err(e) = train_one(&mut owners, FieldOwner::Background, &plan, batch, rays, meshing) {
                 tracing::warn!(error = %e, "background training step skipped");
             }
@@ -150,7 +150,7 @@ fn object_facts(
     owners: &FieldOwners,
     phase: StreamPhase,
     tick: &[FrameIndex],
-    class_sizes: &HashMap<ObjectId, usize>,
+    class_sizes: &ClassSizes,
 ) -> Vec<(usize, FieldFacts)> {
     owners
         .iter()
@@ -158,7 +158,7 @@ fn object_facts(
             let id = object?.id;
             let last_seen = latest.map(LatestBox::last_seen);
             let mesh = MeshSource::of_category_member(member);
-            let class = ClassShare::of_class_size(class_sizes.get(&id).copied().unwrap_or(1));
+            let class = ClassShare::of_class_size(class_sizes.of(id));
             Some((slot.index, object_field_facts(id, last_seen, mesh, phase, tick, class)))
         })
         .collect()
@@ -176,7 +176,7 @@ fn train_one(
     owner: FieldOwner,
     plan: &BatchPlan,
     (batch, hidden): (&mut catmap::field::FieldBatch, &mut Vec<HiddenSpaceCache>),
-    (rays, class_sizes): (&RaySamplerConfig, &HashMap<ObjectId, usize>),
+    (rays, class_sizes): (&RaySamplerConfig, &ClassSizes),
     meshing: &ObjectMeshConfig,
 ) -> catmap::Result<Vec<f32>> {
     let indices = &plan.indices[..];
@@ -188,7 +188,7 @@ fn train_one(
         })
         .map(|(_, object, _, _, bounds, keyframes, slot, rng, loss)| {
             let object_box = bounds.map(|b| meshing.meshed_box(&b.oriented_box));
-            let class_size = |o: &Object| class_sizes.get(&o.id).copied().unwrap_or(1);
+            let class_size = |o: &Object| class_sizes.of(o.id);
             let priors = object.is_some_and(|o| takes_shape_priors(class_size(o)));
             let fitted_box = bounds.filter(|_| priors).map(|b| b.oriented_box);
             let mirror = bounds
