@@ -23,6 +23,7 @@ use nalgebra::{Point3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::grown_box::RepresentativeBox;
+use super::nocs::MemberScale;
 use super::nocs::NocsFrame;
 use crate::error::Result;
 
@@ -59,6 +60,9 @@ pub struct FrameHoldConfig {
     /// `grown` (the representative's box grown to what its members saw,
     /// [`crate::categories::grown_box`]) or `own` (its own box, the paper).
     pub representative_box: RepresentativeBox,
+    /// `representative` (every member at its representative's scale) or `own_box` (each at half
+    /// its own box's longest edge, the paper; [`crate::categories::nocs`]).
+    pub member_scale: MemberScale,
 }
 
 impl Default for FrameHoldConfig {
@@ -69,6 +73,7 @@ impl Default for FrameHoldConfig {
             max_shift: 0.2,
             max_rescale: 0.25,
             representative_box: RepresentativeBox::Grown,
+            member_scale: MemberScale::Representative,
         }
     }
 }

@@ -176,7 +176,12 @@ pub fn register_class_seeing(
                         rep_frame
                     } else {
                         let cloud = &by_id[&id].cloud;
-                        aligned_member_frame(cloud, &alignment.template_from_object, &rep_frame, cfg.min_extent_m)?
+                        aligned_member_frame(
+                            cloud,
+                            &alignment.template_from_object,
+                            &rep_frame,
+                            (cfg.min_extent_m, cfg.frames.member_scale),
+                        )?
                     };
                     Ok((id, RegisteredMember { alignment, nocs }))
                 })
