@@ -33,7 +33,7 @@ pub mod teaser;
 
 pub use chamfer::{normalised_one_way_chamfer, one_way_chamfer};
 pub use cloud::{half_max_extent, voxel_centroids};
-pub use config::{FrontEnd, RegistrationConfig, Rotations};
+pub use config::{FrontEnd, RegistrationConfig, Rotations, Tilt};
 pub use cube_rotations::cube_rotations;
 pub use register::{Registration, RegistrationTrace, refine_registration, register_to_representative};
 pub use robust_start::{RobustTrace, front_end_correspondences};

@@ -3,7 +3,7 @@
 //! rotation error is < 5° and the centre's translation error < 3 cm, or — for symmetric
 //! designs — the aligned clean surface lies within 1 cm (mean) of the true surface.
 
-use catmap::registration::{RegistrationConfig, Rotations, refine_registration, register_to_representative};
+use catmap::registration::{RegistrationConfig, Rotations, Tilt, refine_registration, register_to_representative};
 use catmap::synth::{Design, RegistrationTrial, RegistrationTrialSpec};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -51,6 +51,43 @@ fn upright_trials_register_upright_within_five_degrees_and_three_centimetres() {
         assert!((up.z - 1.0).abs() < 1e-5, "seed {seed}: the estimate tilts ({up:?})");
     });
     assert!(failures.len() <= 2, "more than 5 % of the trials failed: {failures:#?}");
+}
+
+#[test]
+fn a_free_search_with_its_tilt_removed_registers_upright_trials_upright() {
+    // The default: rotations searched freely, a found tilt of 1–15° removed
+    // (`categories.registration.tilt = "removed"`). Upright trials come out within 1° of upright
+    // and pass as the others do; searched alone, some tilt by more.
+    let spec = RegistrationTrialSpec {
+        rotations: Rotations::AboutUp,
+        ..RegistrationTrialSpec::default()
+    };
+    let removed = RegistrationConfig::default();
+    assert_eq!((removed.rotations, removed.tilt), (Rotations::Any, Tilt::Removed));
+    let tilt_deg = |estimate: &nalgebra::Isometry3<f32>| {
+        (estimate.rotation * nalgebra::Vector3::z())
+            .z
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees()
+    };
+    let most_tilt = std::cell::Cell::new(0.0f32);
+    let failures = failed_trials(&spec, &removed, |seed, estimate| {
+        assert!(
+            tilt_deg(estimate) < 1.0,
+            "seed {seed}: the estimate tilts {}°",
+            tilt_deg(estimate)
+        );
+    });
+    assert!(failures.len() <= 2, "more than 5 % of the trials failed: {failures:#?}");
+    let kept = RegistrationConfig {
+        tilt: Tilt::Kept,
+        ..RegistrationConfig::default()
+    };
+    failed_trials(&spec, &kept, |_, estimate| {
+        most_tilt.set(most_tilt.get().max(tilt_deg(estimate)))
+    });
+    assert!(most_tilt.get() >= 1.0, "kept, the largest tilt is {}°", most_tilt.get());
 }
 
 /// The 50 seeded trials of `spec` (the designs in turn) registered with `cfg`, each estimate
