@@ -116,6 +116,19 @@ mod tests {
 
     use super::*;
 
+    /// An armchair's frame: a box 0.82 × 0.70 × 0.72 m standing on the floor at the origin.
+    fn armchair_frame() -> NocsFrame {
+        NocsFrame::of_box(Isometry3::translation(0.0, 0.0, 0.36), Vector3::new(0.82, 0.70, 0.72))
+    }
+
+    /// The corners of [`armchair_frame`]'s box at height `low` and at its top.
+    fn armchair_corners(low: f32) -> Vec<Point3<f32>> {
+        [(-0.41, -0.35), (0.41, -0.35), (-0.41, 0.35), (0.41, 0.35)]
+            .iter()
+            .flat_map(|&(x, y)| [Point3::new(x, y, low), Point3::new(x, y, 0.72)])
+            .collect()
+    }
+
     #[test]
     fn the_representative_box_fits_the_unit_cube() {
         let b = OrientedBox {
@@ -137,13 +150,10 @@ mod tests {
 
     #[test]
     fn floor_points_beside_a_members_feet_stay_out_of_its_frame_but_not_out_of_its_height() {
-        let rep = NocsFrame::of_box(Isometry3::translation(0.0, 0.0, 0.36), Vector3::new(0.82, 0.70, 0.72));
+        let rep = armchair_frame();
         // An armchair's feet and top (its frame's half extents 0.41, 0.35, 0.36), and a mask grown
         // onto the floor 6 cm beyond its side.
-        let mut cloud: Vec<Point3<f32>> = [(-0.41, -0.35), (0.41, -0.35), (-0.41, 0.35), (0.41, 0.35)]
-            .iter()
-            .flat_map(|&(x, y)| [Point3::new(x, y, 0.0), Point3::new(x, y, 0.72)])
-            .collect();
+        let mut cloud = armchair_corners(0.0);
         let clean =
             aligned_member_frame(&cloud, &Isometry3::identity(), &rep, (0.1, MemberScale::OwnBox)).expect("frame");
         cloud.extend((0..5).map(|k| Point3::new(-0.2 + 0.1 * k as f32, 0.41, 0.005)));
@@ -211,12 +221,9 @@ mod tests {
 
     #[test]
     fn a_member_keeps_its_representatives_scale_whatever_strays_its_cloud_holds() {
-        let rep = NocsFrame::of_box(Isometry3::translation(0.0, 0.0, 0.36), Vector3::new(0.82, 0.70, 0.72));
+        let rep = armchair_frame();
         // A member seen whole, and one stray point 4 cm beyond its widest side.
-        let mut cloud: Vec<Point3<f32>> = [(-0.41, -0.35), (0.41, -0.35), (-0.41, 0.35), (0.41, 0.35)]
-            .iter()
-            .flat_map(|&(x, y)| [Point3::new(x, y, 0.05), Point3::new(x, y, 0.72)])
-            .collect();
+        let mut cloud = armchair_corners(0.05);
         cloud.push(Point3::new(0.45, 0.0, 0.4));
         let own =
             aligned_member_frame(&cloud, &Isometry3::identity(), &rep, (0.1, MemberScale::OwnBox)).expect("frame");
