@@ -1,5 +1,6 @@
 //! [`RegistrationConfig`]: every constant of METHOD.md §4, with METHOD's values as defaults.
 
+use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Where the putative correspondences of the robust back end come from.
@@ -124,6 +125,17 @@ pub struct RegistrationConfig {
     pub fpfh_feature_radius_voxels: f32,
 }
 
+impl RegistrationConfig {
+    /// Whether a found `rotation` has its tilt removed ([`Tilt::Removed`]): rotations searched
+    /// freely, and world up turned by an angle within `removed_tilt_deg`.
+    pub fn removes_tilt(&self, rotation: &UnitQuaternion<f64>) -> bool {
+        let up = rotation * Vector3::z();
+        let tilt_deg = up.z.clamp(-1.0, 1.0).acos().to_degrees();
+        let [least, most] = self.removed_tilt_deg.map(f64::from);
+        self.rotations == Rotations::Any && self.tilt == Tilt::Removed && (least..=most).contains(&tilt_deg)
+    }
+}
+
 impl Default for RegistrationConfig {
     fn default() -> Self {
         Self {
@@ -165,6 +177,32 @@ impl Default for RegistrationConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn tilted(deg: f64) -> UnitQuaternion<f64> {
+        UnitQuaternion::from_euler_angles(deg.to_radians(), 0.0, 0.7)
+    }
+
+    #[test]
+    fn only_a_tilt_of_one_to_fifteen_degrees_of_a_free_search_is_removed() {
+        let cfg = RegistrationConfig::default();
+        assert!(!cfg.removes_tilt(&tilted(0.0)), "a turn about up has none");
+        assert!(!cfg.removes_tilt(&tilted(0.5)), "within the search's precision");
+        assert!(cfg.removes_tilt(&tilted(4.5)) && cfg.removes_tilt(&tilted(-14.0)));
+        assert!(!cfg.removes_tilt(&tilted(40.0)), "an object on its side");
+        let kept = RegistrationConfig {
+            tilt: Tilt::Kept,
+            ..RegistrationConfig::default()
+        };
+        assert!(!kept.removes_tilt(&tilted(4.5)));
+        let upright = RegistrationConfig {
+            rotations: Rotations::AboutUp,
+            ..RegistrationConfig::default()
+        };
+        assert!(
+            !upright.removes_tilt(&tilted(4.5)),
+            "an upright search has nothing to remove"
+        );
+    }
 
     #[test]
     fn a_config_file_may_list_only_overrides() {

@@ -38,7 +38,7 @@ use rayon::prelude::*;
 use super::RegistrationConfig;
 use super::chamfer::{normalised_one_way_chamfer, trimmed_normalised_chamfer};
 use super::cloud::{check_cloud, voxel_centroids};
-use super::config::{Rotations, Tilt};
+use super::config::Rotations;
 use super::icp::{IcpCounts, IcpParams, icp_point_to_point};
 use super::robust_start::{RobustTrace, robust_start};
 use super::start_rotations::{centroid, start_rotations, upright_start};
@@ -272,10 +272,10 @@ impl Level {
         (pose, icp + run)
     }
 
-    /// `pose` turned upright and refined about up ([`Tilt::Removed`]) when `cfg` asks for it and
-    /// its tilt is small; otherwise `pose` as it is.
+    /// `pose` turned upright and refined about up when `cfg` removes its tilt
+    /// ([`RegistrationConfig::removes_tilt`]); otherwise `pose` as it is.
     fn without_tilt(&self, pose: Isometry3<f64>, cfg: &RegistrationConfig) -> (Isometry3<f64>, IcpCounts) {
-        if !removes_tilt(&pose, cfg) {
+        if !cfg.removes_tilt(&pose.rotation) {
             return (pose, IcpCounts::default());
         }
         let upright = RegistrationConfig {
@@ -289,15 +289,6 @@ impl Level {
         let moved: Vec<Point3<f32>> = self.source.iter().map(|p| (pose * p.cast()).cast()).collect();
         trimmed_normalised_chamfer(&moved, &self.index, keep_fraction)
     }
-}
-
-/// Whether `cfg` has the tilt of `pose` removed: rotations searched freely, [`Tilt::Removed`], and
-/// world up turned by an angle within `removed_tilt_deg`.
-fn removes_tilt(pose: &Isometry3<f64>, cfg: &RegistrationConfig) -> bool {
-    let up = pose.rotation * Vector3::z();
-    let tilt_deg = up.z.clamp(-1.0, 1.0).acos().to_degrees();
-    let [least, most] = cfg.removed_tilt_deg.map(f64::from);
-    cfg.rotations == Rotations::Any && cfg.tilt == Tilt::Removed && (least..=most).contains(&tilt_deg)
 }
 
 /// ICP at `gate` for at most `iterations`, keeping `keep_fraction` of the pairs, with `cfg`'s
