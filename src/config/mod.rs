@@ -95,9 +95,10 @@ impl MapperConfig {
 
     /// These settings for depth images like `depth`: a depth camera's are smoothed (the
     /// bilateral filter of [`crate::sensor::depth_smoothing`]), its boxes fitted to the cloud
-    /// voxels with at least 3 points (`objects.box_min_voxel_points`: its strays left out), and
-    /// the views allow for its noise (`dataset.depth_noise_per_m2`); exact ones get none of it
-    /// and keep the masks' box rule. Measured in docs/ROBUSTNESS.md.
+    /// voxels with at least 3 points (`objects.box_min_voxel_points`: its strays left out),
+    /// moved onto their local planes (`objects.box_smoothing_m`, [`CAMERA_BOX_SMOOTHING_M`]),
+    /// and the views allow for its noise (`dataset.depth_noise_per_m2`); exact ones get none of
+    /// it and keep the masks' box rule. Measured in docs/ROBUSTNESS.md.
     pub fn with_depth_images(mut self, depth: DepthImages) -> Self {
         let (smoothing, depth_noise_per_m2) = match depth {
             DepthImages::Exact => (DepthSmoothing::None, 0.0),
@@ -107,6 +108,9 @@ impl MapperConfig {
         self.dataset.depth_noise_per_m2 = depth_noise_per_m2;
         if depth == DepthImages::Camera {
             self.objects.box_min_voxel_points = self.objects.box_min_voxel_points.max(3);
+            self.objects.box_smoothing_m = CAMERA_BOX_SMOOTHING_M;
+        } else {
+            self.objects.box_smoothing_m = 0.0;
         }
         self
     }
@@ -197,6 +201,10 @@ impl MapperConfig {
 /// up front, and more than a few seconds of frames in flight only costs memory.
 pub const MAX_CHANNEL_CAPACITY: usize = 1024;
 
+/// `objects.box_smoothing_m` for a depth camera's images (`catmap run --depth camera`): of 3, 5,
+/// 8 and 12 cm, 8 cm did best on the Kinect-like default scene (docs/ROBUSTNESS.md, session 46).
+pub const CAMERA_BOX_SMOOTHING_M: f32 = 0.08;
+
 /// 1-based line of byte `offset` in `text`.
 fn line_of(text: &str, offset: usize) -> usize {
     let end = offset.min(text.len());
@@ -251,7 +259,9 @@ mod tests {
             "the views allow for its noise"
         );
         assert_eq!(camera.objects.box_min_voxel_points, 3);
+        assert_eq!(camera.objects.box_smoothing_m, 0.08, "on their local planes");
         let exact = camera.with_depth_images(DepthImages::Exact);
+        assert_eq!(exact.objects.box_smoothing_m, 0.0);
         assert_eq!(exact.dataset, MapperConfig::default().dataset);
         assert_eq!(exact.objects.box_min_voxel_points, 3, "the masks' to reset");
         assert_eq!(

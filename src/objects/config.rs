@@ -31,6 +31,13 @@ pub struct ObjectConfig {
     /// land in a voxel of their own, while a surface fills its voxels frame after frame. All voxels count while fewer than
     /// [`crate::objects::object_bounds::MIN_POINTS_FOR_BOX`] hold enough.
     pub box_min_voxel_points: u32,
+    /// Radius of the local plane each point the object's box and mirror plane are fitted to is
+    /// moved onto, metres ([`crate::geometry::local_planes`]; the points of its shape,
+    /// [`crate::objects::object_bounds::shape_points`]): a depth camera's noise makes a face seen
+    /// from afar a shell centimetres thick, and a box fitted to it, or a mirror plane matched on
+    /// it, reads the shell's extremes. 0 (the default, exact depth): the points stay as observed.
+    /// Registration reads them unmoved (moved, members registered worse: docs/ROBUSTNESS.md).
+    pub box_smoothing_m: f32,
     /// Whether the frames that segment an object vote on its cloud's voxels: a voxel more views
     /// see as something else (a mask bled onto the floor or the wall) is left out of the
     /// object's points ([`crate::objects::observed_cloud`]; `by_views`, the default, or `off`).
@@ -128,6 +135,7 @@ impl Default for ObjectConfig {
             bounds_refresh_growth: 0.1,
             bounds_voxel_m: 0.02,
             box_min_voxel_points: 1,
+            box_smoothing_m: 0.0,
             voxel_votes: VoxelVotes::default(),
             background_pixel_stride: 4,
             background_voxel_m: 0.05,
