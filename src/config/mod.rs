@@ -96,7 +96,7 @@ impl MapperConfig {
     /// These settings for depth images like `depth`: a depth camera's are smoothed (the
     /// bilateral filter of [`crate::sensor::depth_smoothing`]), its boxes fitted to the cloud
     /// voxels with at least 3 points (`objects.box_min_voxel_points`: its strays left out),
-    /// moved onto their local planes (`objects.box_smoothing_m`, [`CAMERA_BOX_SMOOTHING_M`]),
+    /// moved onto their local surfaces (`objects.box_smoothing_m`, [`CAMERA_BOX_SMOOTHING_M`]),
     /// and the views allow for its noise (`dataset.depth_noise_per_m2`); exact ones get none of
     /// it and keep the masks' box rule. Measured in docs/ROBUSTNESS.md.
     pub fn with_depth_images(mut self, depth: DepthImages) -> Self {
@@ -259,7 +259,7 @@ mod tests {
             "the views allow for its noise"
         );
         assert_eq!(camera.objects.box_min_voxel_points, 3);
-        assert_eq!(camera.objects.box_smoothing_m, 0.08, "on their local planes");
+        assert_eq!(camera.objects.box_smoothing_m, 0.08, "on their local surfaces");
         let exact = camera.with_depth_images(DepthImages::Exact);
         assert_eq!(exact.objects.box_smoothing_m, 0.0);
         assert_eq!(exact.dataset, MapperConfig::default().dataset);

@@ -1,7 +1,7 @@
 //! Geometry shared by every layer: oriented boxes, nearest-neighbour queries, triangle meshes and
 //! their PLY files.
 
-pub mod local_planes;
+pub mod local_surfaces;
 pub mod mesh;
 pub mod mirror_symmetry;
 pub mod nearest;

@@ -31,8 +31,8 @@ pub struct ObjectConfig {
     /// land in a voxel of their own, while a surface fills its voxels frame after frame. All voxels count while fewer than
     /// [`crate::objects::object_bounds::MIN_POINTS_FOR_BOX`] hold enough.
     pub box_min_voxel_points: u32,
-    /// Radius of the local plane each point the object's box and mirror plane are fitted to is
-    /// moved onto, metres ([`crate::geometry::local_planes`]; the points of its shape,
+    /// Radius of the local surface (a quadric over the local plane) each point the object's box
+    /// and mirror plane are fitted to is moved onto, metres ([`crate::geometry::local_surfaces`]; the points of its shape,
     /// [`crate::objects::object_bounds::shape_points`]): a depth camera's noise makes a face seen
     /// from afar a shell centimetres thick, and a box fitted to it, or a mirror plane matched on
     /// it, reads the shell's extremes. 0 (the default, exact depth): the points stay as observed.

@@ -3,7 +3,7 @@
 use nalgebra::Point3;
 
 use crate::error::{CatmapError, Result};
-use crate::geometry::local_planes::onto_local_planes;
+use crate::geometry::local_surfaces::onto_local_surfaces;
 use crate::geometry::mirror_symmetry::{MirrorPlane, SymmetryConfig, find_vertical_mirrors};
 use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box};
 use crate::geometry::upright_box::{fit_upright_box, fit_upright_box_on_faces};
@@ -161,18 +161,19 @@ pub fn shape_points(cloud: &ObservedCloud, min_voxel_points: u32) -> Vec<Point3<
     }
 }
 
-/// `points` each moved onto the plane of its neighbours within `radius_m` ([`onto_local_planes`],
-/// the planes fitted to the points thinned to a third of the radius); unmoved when `radius_m` is 0.
-pub fn on_local_planes(points: Vec<Point3<f32>>, radius_m: f32) -> Vec<Point3<f32>> {
+/// `points` each moved onto the surface of its neighbours within `radius_m`
+/// ([`onto_local_surfaces`], the surfaces fitted to the points thinned to a third of the radius);
+/// unmoved when `radius_m` is 0.
+pub fn on_local_surfaces(points: Vec<Point3<f32>>, radius_m: f32) -> Vec<Point3<f32>> {
     if radius_m <= 0.0 {
         return points;
     }
     let reference = voxel_downsample(&points, radius_m / 3.0);
-    onto_local_planes(&points, &reference, radius_m)
+    onto_local_surfaces(&points, &reference, radius_m)
 }
 
 /// The box of the cloud's [`shape_points`] (`box_min_voxel_points`), moved onto their local
-/// planes (`box_smoothing_m`, [`on_local_planes`]), thinned to `bounds_voxel_m`, fitted as
+/// surfaces (`box_smoothing_m`, [`on_local_surfaces`]), thinned to `bounds_voxel_m`, fitted as
 /// `box_fit` says (unset: the minimum-volume box), every edge ≥ `min_extent_m`.
 pub fn fit_object_box(cloud: &ObservedCloud, cfg: &ObjectConfig) -> Result<OrientedBox> {
     Ok(fit_object_bounds(cloud, MirrorStep::Keep(None), cfg)?.oriented_box)
@@ -187,7 +188,7 @@ pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &Object
             cloud.len()
         )));
     }
-    let shape = on_local_planes(shape_points(cloud, cfg.box_min_voxel_points), cfg.box_smoothing_m);
+    let shape = on_local_surfaces(shape_points(cloud, cfg.box_min_voxel_points), cfg.box_smoothing_m);
     let thinned = voxel_downsample(&shape, cfg.bounds_voxel_m);
     let oriented_box = match cfg.box_fit.unwrap_or_default() {
         BoxFit::MinimumVolume => fit_minimum_volume_box(&thinned)?,

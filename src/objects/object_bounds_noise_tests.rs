@@ -1,4 +1,4 @@
-//! A box fitted to a noisy cloud seen from afar, with and without the shape's local planes
+//! A box fitted to a noisy cloud seen from afar, with and without its points moved onto their local surfaces
 //! (`objects.box_smoothing_m`).
 
 use nalgebra::Point3;
