@@ -161,9 +161,8 @@ pub fn shape_points(cloud: &ObservedCloud, min_voxel_points: u32) -> Vec<Point3<
     }
 }
 
-/// `points` each moved onto the surface of its neighbours within `radius_m`
-/// ([`onto_local_surfaces`], the surfaces fitted to the points thinned to a third of the radius);
-/// unmoved when `radius_m` is 0.
+/// `points` moved onto their neighbours' surfaces within `radius_m` ([`onto_local_surfaces`], fitted
+/// to the points thinned to a third of the radius); unmoved when `radius_m` is 0.
 pub fn on_local_surfaces(points: Vec<Point3<f32>>, radius_m: f32) -> Vec<Point3<f32>> {
     if radius_m <= 0.0 {
         return points;
