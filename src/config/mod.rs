@@ -96,7 +96,7 @@ impl MapperConfig {
     /// These settings for depth images like `depth`: a depth camera's are smoothed (the
     /// bilateral filter of [`crate::sensor::depth_smoothing`]), its boxes fitted to the cloud
     /// voxels with at least 3 points (`objects.box_min_voxel_points`: its strays left out),
-    /// moved onto their local surfaces (`objects.box_smoothing_m`, [`CAMERA_BOX_SMOOTHING_M`]),
+    /// moved onto their local surfaces (`objects.box_smoothing_m`, [`crate::objects::config::CAMERA_BOX_SMOOTHING_M`]),
     /// and the views allow for its noise (`dataset.depth_noise_per_m2`); exact ones get none of
     /// it and keep the masks' box rule. Measured in docs/ROBUSTNESS.md.
     pub fn with_depth_images(mut self, depth: DepthImages) -> Self {
@@ -108,7 +108,7 @@ impl MapperConfig {
         self.dataset.depth_noise_per_m2 = depth_noise_per_m2;
         if depth == DepthImages::Camera {
             self.objects.box_min_voxel_points = self.objects.box_min_voxel_points.max(3);
-            self.objects.box_smoothing_m = CAMERA_BOX_SMOOTHING_M;
+            self.objects.box_smoothing_m = crate::objects::config::CAMERA_BOX_SMOOTHING_M;
         } else {
             self.objects.box_smoothing_m = 0.0;
         }
@@ -201,10 +201,6 @@ impl MapperConfig {
 /// up front, and more than a few seconds of frames in flight only costs memory.
 pub const MAX_CHANNEL_CAPACITY: usize = 1024;
 
-/// `objects.box_smoothing_m` for a depth camera's images (`catmap run --depth camera`): of 3, 5,
-/// 8 and 12 cm, 8 cm did best on the Kinect-like default scene (docs/ROBUSTNESS.md, session 46).
-pub const CAMERA_BOX_SMOOTHING_M: f32 = 0.08;
-
 /// 1-based line of byte `offset` in `text`.
 fn line_of(text: &str, offset: usize) -> usize {
     let end = offset.min(text.len());
@@ -212,43 +208,12 @@ fn line_of(text: &str, offset: usize) -> usize {
 }
 
 #[cfg(test)]
+#[path = "reference_tests.rs"]
+mod reference_tests;
+
+#[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Every key `catmap config` prints, as a dotted path.
-    fn printed_keys(table: &toml::Table, prefix: &str, keys: &mut Vec<String>) {
-        for (key, value) in table {
-            let path = if prefix.is_empty() {
-                key.clone()
-            } else {
-                format!("{prefix}.{key}")
-            };
-            match value {
-                toml::Value::Table(inner) => printed_keys(inner, &path, keys),
-                _ => keys.push(path),
-            }
-        }
-    }
-
-    /// docs/CONFIG.md, the configuration's reference.
-    const CONFIG_PAGE: &str = include_str!("../../docs/CONFIG.md");
-
-    /// The backticked keys in the first cell of each row of docs/CONFIG.md's table.
-    fn keys_with_a_row() -> Vec<String> {
-        CONFIG_PAGE
-            .lines()
-            .filter(|line| line.starts_with("| `"))
-            .flat_map(|row| {
-                let first_cell = row.split('|').nth(1).unwrap_or("");
-                first_cell
-                    .split('`')
-                    .skip(1)
-                    .step_by(2)
-                    .map(str::to_owned)
-                    .collect::<Vec<_>>()
-            })
-            .collect()
-    }
 
     #[test]
     fn a_depth_cameras_images_are_smoothed_and_their_boxes_skip_lone_voxels() {
@@ -268,54 +233,6 @@ mod tests {
             MapperConfig::default().with_depth_images(DepthImages::Exact),
             MapperConfig::default()
         );
-    }
-
-    #[test]
-    fn every_key_catmap_config_prints_is_explained_in_docs_config_md_and_every_row_names_a_key() {
-        let table: toml::Table = toml::from_str(&MapperConfig::default().to_toml()).expect("printed TOML parses");
-        let mut keys = Vec::new();
-        printed_keys(&table, "", &mut keys);
-        assert!(keys.len() > 100, "the whole tree: {}", keys.len());
-        let unexplained: Vec<&String> = keys
-            .iter()
-            .filter(|key| !CONFIG_PAGE.contains(&format!("| `{key}`")) && !CONFIG_PAGE.contains(&format!(", `{key}`")))
-            .collect();
-        assert!(
-            unexplained.is_empty(),
-            "keys without a row in docs/CONFIG.md: {unexplained:?}"
-        );
-        // The other way round: a row names only keys of the tree. A key unset by default
-        // (`Option`, not printed) must still be one the parser knows.
-        let rows = keys_with_a_row();
-        assert!(rows.len() > 100, "the table's keys: {}", rows.len());
-        let stale: Vec<&String> = rows
-            .iter()
-            .filter(|key| !keys.contains(key) && !a_key_the_parser_knows(key))
-            .collect();
-        assert!(stale.is_empty(), "rows of docs/CONFIG.md naming no key: {stale:?}");
-        assert!(
-            a_key_the_parser_knows("stream.max_frames") && !a_key_the_parser_knows("stream.max_frame"),
-            "the check tells an unset key from a misspelt one"
-        );
-        assert!(!a_key_the_parser_knows("fields.object_rays"), "a table is no key");
-    }
-
-    /// Whether `key` (dotted) is a leaf of the configuration tree: setting it is not refused as
-    /// an unknown field (a value of the wrong type may be), and it is no table of the printed tree.
-    fn a_key_the_parser_knows(key: &str) -> bool {
-        let (section, leaf) = key.rsplit_once('.').unwrap_or(("", key));
-        let text = if section.is_empty() {
-            format!("{leaf} = 1\n")
-        } else {
-            format!("[{section}]\n{leaf} = 1\n")
-        };
-        let unknown = MapperConfig::from_toml(&text).is_err_and(|e| e.to_string().contains("unknown field"));
-        let printed: toml::Table = toml::from_str(&MapperConfig::default().to_toml()).expect("printed TOML parses");
-        let is_table = key
-            .split('.')
-            .try_fold(&printed, |table, part| table.get(part).and_then(toml::Value::as_table))
-            .is_some();
-        !unknown && !is_table
     }
 
     #[test]

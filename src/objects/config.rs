@@ -32,10 +32,11 @@ pub struct ObjectConfig {
     /// [`crate::objects::object_bounds::MIN_POINTS_FOR_BOX`] hold enough.
     pub box_min_voxel_points: u32,
     /// Radius of the local surface (a quadric over the local plane) each point the object's box
-    /// and mirror plane are fitted to is moved onto, metres ([`crate::geometry::local_surfaces`]; the points of its shape,
-    /// [`crate::objects::object_bounds::shape_points`]): a depth camera's noise makes a face seen
-    /// from afar a shell centimetres thick, and a box fitted to it, or a mirror plane matched on
-    /// it, reads the shell's extremes. 0 (the default, exact depth): the points stay as observed.
+    /// and mirror plane are fitted to is moved onto, metres ([`crate::geometry::local_surfaces`];
+    /// the points of its shape, [`crate::objects::object_bounds::shape_points`]): a depth
+    /// camera's noise makes a face seen from afar a shell centimetres thick, and a box fitted to
+    /// it, or a mirror plane matched on it, reads the shell's extremes. 0 (the default, exact
+    /// depth): the points stay as observed; [`CAMERA_BOX_SMOOTHING_M`] under `--depth camera`.
     /// Registration reads them unmoved (moved, members registered worse: docs/ROBUSTNESS.md).
     pub box_smoothing_m: f32,
     /// Whether the frames that segment an object vote on its cloud's voxels: a voxel more views
@@ -77,6 +78,11 @@ pub struct ObjectConfig {
     /// into objects ([`crate::objects::instance_association`]).
     pub association: AssociationConfig,
 }
+
+/// `objects.box_smoothing_m` for a depth camera's images (`catmap run --depth camera`): of 3, 5,
+/// 6.5, 8 and 12 cm, 8 cm did best on the Kinect-like default scene (docs/ROBUSTNESS.md, session
+/// 46).
+pub const CAMERA_BOX_SMOOTHING_M: f32 = 0.08;
 
 /// What the masks' borders are like (`catmap run --masks`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
