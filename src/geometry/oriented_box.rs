@@ -47,14 +47,20 @@ impl OrientedBox {
         })
     }
 
+    /// The angle about world z of the box's x axis, radians from world x (of its y axis when x
+    /// stands upright): the turn of its [`OrientedBox::upright`] box.
+    pub fn yaw(&self) -> f32 {
+        let axes = self.world_from_box.rotation.to_rotation_matrix().into_inner();
+        let (x, y) = (axes.column(0), axes.column(1));
+        let along = if x.x.hypot(x.y) >= 1e-3 { x } else { y };
+        along.y.atan2(along.x)
+    }
+
     /// The smallest box standing upright (its z along world z) that encloses this one, turned
     /// about world z as this box's x axis is (its y axis when x stands upright). A box fitted to
     /// a partly seen object may lean; space "beside" or "under" the object is upright space.
     pub fn upright(&self) -> OrientedBox {
-        let axes = self.world_from_box.rotation.to_rotation_matrix().into_inner();
-        let (x, y) = (axes.column(0), axes.column(1));
-        let along = if x.x.hypot(x.y) >= 1e-3 { x } else { y };
-        let yaw = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), along.y.atan2(along.x));
+        let yaw = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), self.yaw());
         let frame = Isometry3::from_parts(self.world_from_box.translation, yaw);
         let corners = self.corners().map(|c| frame.inverse_transform_point(&c).coords);
         let (lo, hi) = corners.iter().fold(

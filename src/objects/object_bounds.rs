@@ -4,7 +4,7 @@ use nalgebra::Point3;
 
 use crate::error::{CatmapError, Result};
 use crate::geometry::local_surfaces::onto_local_surfaces;
-use crate::geometry::mirror_symmetry::{MirrorPlane, SymmetryConfig, find_vertical_mirrors};
+use crate::geometry::mirror_symmetry::{MirrorDirections, MirrorPlane, SymmetryConfig, find_vertical_mirrors};
 use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box};
 use crate::geometry::upright_box::{fit_upright_box, fit_upright_box_on_faces};
 use crate::objects::config::{BoxFit, ObjectConfig};
@@ -154,11 +154,10 @@ pub fn refit_stale_boxes<'a, K: Send>(
 /// or of all its uncontested voxels while fewer than [`MIN_POINTS_FOR_BOX`] hold enough.
 pub fn shape_points(cloud: &ObservedCloud, min_voxel_points: u32) -> Vec<Point3<f32>> {
     let kept = cloud.points_of_voxels_with(min_voxel_points);
-    if kept.len() < MIN_POINTS_FOR_BOX {
-        cloud.points()
-    } else {
-        kept
+    if kept.len() >= MIN_POINTS_FOR_BOX {
+        return kept;
     }
+    cloud.points()
 }
 
 /// `points` moved onto their neighbours' surfaces within `radius_m` ([`onto_local_surfaces`], fitted
@@ -179,7 +178,7 @@ pub fn fit_object_box(cloud: &ObservedCloud, cfg: &ObjectConfig) -> Result<Orien
 }
 
 /// The box of [`fit_object_box`] and, as `mirror` says, the mirror plane of the same thinned
-/// (and smoothed) cloud searched now or the one given kept.
+/// (and smoothed) cloud searched now (along the box's axes first) or the one given kept.
 pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &ObjectConfig) -> Result<FittedBounds> {
     if cloud.len() < MIN_POINTS_FOR_BOX {
         return Err(CatmapError::Degenerate(format!(
@@ -197,7 +196,8 @@ pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &Object
     let oriented_box = oriented_box.with_min_extent(cfg.min_extent_m);
     let mirror = match mirror {
         MirrorStep::Search => {
-            let (first, second) = find_vertical_mirrors(&thinned, &SymmetryConfig::default());
+            let (yaw, symmetry) = (oriented_box.yaw(), SymmetryConfig::default());
+            let (first, second) = find_vertical_mirrors(&thinned, &symmetry, MirrorDirections::BoxAxesFirst { yaw });
             Some(MirrorFit {
                 plane: first.map(|f| f.plane),
                 second: second.map(|f| f.plane),
