@@ -130,7 +130,7 @@ const REFINE_KEEP: f32 = 0.95;
 /// The best vertical mirror plane of `points` (world frame, z up), if its matched share reaches
 /// `cfg.min_matched`; see the module doc.
 pub fn find_vertical_mirror(points: &[Point3<f32>], cfg: &SymmetryConfig) -> Option<SymmetryFit> {
-    Search::new(points, cfg)?.best(coarse_directions(), cfg.min_matched)
+    Search::new(points, cfg)?.best(coarse_directions())
 }
 
 /// Which directions the search tries for the first plane.
@@ -163,17 +163,15 @@ pub fn find_vertical_mirrors(
     };
     let along_box = match directions {
         MirrorDirections::Any => None,
-        MirrorDirections::BoxAxesFirst { yaw } => {
-            search.best([yaw, yaw + std::f32::consts::FRAC_PI_2].into_iter(), cfg.min_matched)
-        }
+        MirrorDirections::BoxAxesFirst { yaw } => search.best([yaw, yaw + std::f32::consts::FRAC_PI_2].into_iter()),
     };
-    let Some(first) = along_box.or_else(|| search.best(coarse_directions(), cfg.min_matched)) else {
+    let Some(first) = along_box.or_else(|| search.best(coarse_directions())) else {
         return (None, None);
     };
     let normal = first.plane.normal;
     let right_angle = normal.x.atan2(-normal.y);
     let second = search
-        .best(std::iter::once(right_angle), cfg.min_matched)
+        .best(std::iter::once(right_angle))
         .filter(|f| f.matched >= cfg.min_matched_second);
     (Some(first), second)
 }
@@ -204,7 +202,7 @@ impl<'a> Search<'a> {
 
     /// The best plane whose normal is at one of the angles `thetas` (radians from world x),
     /// refined to within a few degrees of it.
-    fn best(&self, thetas: impl Iterator<Item = f32>, min_matched: f32) -> Option<SymmetryFit> {
+    fn best(&self, thetas: impl Iterator<Item = f32>) -> Option<SymmetryFit> {
         let (coarse, cfg) = (&self.coarse, self.cfg);
         let mut planes = Vec::new();
         for theta in thetas {
@@ -247,7 +245,7 @@ impl<'a> Search<'a> {
         )?;
         let (dtheta, doffset) = (dtheta / (step * step), COARSE_OFFSET_M / (step * step));
         let refined = nearest_of_the_best(around(fine_best.plane, dtheta, doffset), &self.fine, &self.cells, cfg)?;
-        Some(refined).filter(|f| f.matched >= min_matched)
+        Some(refined).filter(|f| f.matched >= cfg.min_matched)
     }
 }
 
