@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::AlignmentTemplate;
 use crate::categories::held_frames::FrameHoldConfig;
 use crate::categories::subcategories::SubcategoryRule;
 use crate::categories::uncertainty::{RepresentativeChoice, UncertaintyConfig};
@@ -36,6 +37,9 @@ pub struct CategoryConfig {
     /// A member's alignment to its representative, searched again with less trimming when it
     /// fits worse than its twins'.
     pub second_search: SecondSearch,
+    /// What a member's final alignment fits: its representative's cloud, or its whole
+    /// subcategory's ([`AlignmentTemplate`]).
+    pub alignment_template: AlignmentTemplate,
     /// Where a re-registration starts each pair registered before.
     pub registration_start: RegistrationStart,
     /// A warm start is kept when its score is at most the stored one × (1 + this); otherwise the
@@ -116,6 +120,7 @@ impl Default for CategoryConfig {
             cloud_voxel_m: 0.02,
             min_extent_m: 0.10,
             second_search: SecondSearch::default(),
+            alignment_template: AlignmentTemplate::default(),
             registration_start: RegistrationStart::Search,
             warm_start_tolerance: 0.1,
             uncertainty_refresh_growth: 0.25,

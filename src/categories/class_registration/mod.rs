@@ -4,6 +4,7 @@
 mod config;
 mod pair_cache;
 mod pairs;
+mod subcategory_template;
 
 use std::collections::BTreeMap;
 
@@ -15,6 +16,7 @@ use serde::{Deserialize, Serialize};
 pub use config::{CategoryConfig, RegistrationStart, SecondSearch};
 pub use pair_cache::{CachedPair, PairCache, PairPoints, PairSearches, PairVersions};
 pub use pairs::warm_start_holds;
+pub use subcategory_template::AlignmentTemplate;
 
 use crate::categories::grown_box::{RepresentativeBox, grown_box};
 use crate::categories::held_frames::{RepresentativeFrame, hold_frame};
@@ -140,6 +142,7 @@ pub fn register_class_seeing(
     let groups = groups
         .into_iter()
         .map(|group| searched_again(group, &pairs, &cfg.second_search))
+        .map(|group| subcategory_template::refined_against(group?, &clouds, cfg, seed))
         .collect::<Result<Vec<_>>>()?;
     let groups = groups
         .into_iter()
