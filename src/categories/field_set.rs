@@ -17,7 +17,7 @@ use super::nocs::NocsFrame;
 use crate::error::Result;
 use crate::field::AdamWConfig;
 use crate::field::category::CategoryFieldConfig;
-use crate::field::category::{CATEGORY_HIDDEN, CategoryBatch, CategoryField, CategorySamples};
+use crate::field::category::{CATEGORY_HIDDEN, CategoryBatch, CategoryField, CategorySamples, MemberCodes};
 use crate::field::free_space::CarveCounts;
 use crate::field::{RaySamplerConfig, RaySamples};
 use crate::ids::{FrameIndex, ObjectId};
@@ -117,13 +117,13 @@ impl CategoryFieldSet {
 
     /// Brings the fields in step with `subcategories` (every class's, in any order; fields are
     /// ordered by representative) and returns every member's place. Fields are created from
-    /// `seed` with `code_dim`-dimensional codes; nothing changes when the membership did not. A
+    /// `seed` with `codes`; nothing changes when the membership did not. A
     /// member whose frame moved beyond `frames`' tolerance gets a fresh code (`held_frames`).
     pub fn follow<'a>(
         &mut self,
         subcategories: impl IntoIterator<Item = &'a RegisteredSubcategory>,
         seed: u64,
-        code_dim: usize,
+        codes: MemberCodes,
         frames: &FrameHoldConfig,
     ) -> BTreeMap<ObjectId, MemberPlace> {
         let mut groups: Vec<&RegisteredSubcategory> =
@@ -142,7 +142,7 @@ impl CategoryFieldSet {
                     }
                 }
             }
-            self.apply_plan(&plan, seed, code_dim);
+            self.apply_plan(&plan, seed, codes);
             if wanted != self.members {
                 self.members = wanted;
                 self.losses = vec![f32::NAN; self.members.len()];
@@ -179,7 +179,7 @@ impl CategoryFieldSet {
 
     /// Rebuilds the batch as `plan` says: continued fields keep their network and remap their
     /// codes (a field whose remap fails starts over), the others start fresh.
-    fn apply_plan(&mut self, plan: &[PlannedField], seed: u64, code_dim: usize) {
+    fn apply_plan(&mut self, plan: &[PlannedField], seed: u64, codes: MemberCodes) {
         let mut old: Vec<Option<CategoryField>> = Vec::new();
         while let Some(field) = self.batch.remove(0) {
             old.push(Some(field));
@@ -197,10 +197,10 @@ impl CategoryFieldSet {
                     Err(e) => {
                         tracing::warn!(error = %e, "category field restarted");
                         self.retire(id, i, Retirement::Restarted);
-                        self.new_field(seed, code_dim, planned.members.len())
+                        self.new_field(seed, codes, planned.members.len())
                     }
                 },
-                None => self.new_field(seed, code_dim, planned.members.len()),
+                None => self.new_field(seed, codes, planned.members.len()),
             };
             self.batch.push(field);
             self.ids.push(id);
@@ -231,12 +231,12 @@ impl CategoryFieldSet {
     }
 
     /// A fresh category field (the next one created) with `members` members, and its number.
-    fn new_field(&mut self, seed: u64, code_dim: usize, members: usize) -> (CategoryField, u32) {
+    fn new_field(&mut self, seed: u64, codes: MemberCodes, members: usize) -> (CategoryField, u32) {
         let id = self.fields_created;
         let mut rng = seeded_rng(seed, RngStream::CategoryField(id));
         self.fields_created += 1;
         (
-            CategoryField::new(CATEGORY_HIDDEN, code_dim, 1.0, members, &mut rng),
+            CategoryField::new(CATEGORY_HIDDEN, codes.dim, 1.0, members, &mut rng).with_shape_codes(codes.shape),
             id,
         )
     }

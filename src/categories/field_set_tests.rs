@@ -31,7 +31,7 @@ fn fields_follow_the_multi_member_subcategories_by_representative() {
         subcategory(1, &[1, 2, 3]),
         subcategory(5, &[5]),
     ];
-    let places = set.follow(&groups, 3, 8, &FrameHoldConfig::default());
+    let places = set.follow(&groups, 3, MemberCodes::per_member(8), &FrameHoldConfig::default());
     assert_eq!(
         set.members,
         vec![
@@ -55,16 +55,26 @@ fn fields_follow_the_multi_member_subcategories_by_representative() {
 #[test]
 fn an_unchanged_membership_keeps_the_fields_and_a_split_starts_one_more() {
     let mut set = CategoryFieldSet::new(AdamWConfig::default());
-    set.follow(&[subcategory(1, &[1, 2, 3, 4])], 3, 8, &FrameHoldConfig::default());
+    set.follow(
+        &[subcategory(1, &[1, 2, 3, 4])],
+        3,
+        MemberCodes::per_member(8),
+        &FrameHoldConfig::default(),
+    );
     set.losses[0] = 0.5;
     let before = set.batch.field(0).cloned();
-    set.follow(&[subcategory(1, &[1, 2, 3, 4])], 3, 8, &FrameHoldConfig::default());
+    set.follow(
+        &[subcategory(1, &[1, 2, 3, 4])],
+        3,
+        MemberCodes::per_member(8),
+        &FrameHoldConfig::default(),
+    );
     assert_eq!((set.remaps, set.losses[0]), (1, 0.5), "nothing to remap");
     assert_eq!(set.batch.field(0).cloned(), before);
     let places = set.follow(
         &[subcategory(1, &[1, 2, 3]), subcategory(4, &[4, 9])],
         3,
-        8,
+        MemberCodes::per_member(8),
         &FrameHoldConfig::default(),
     );
     assert_eq!(set.ids, vec![0, 1], "the larger part continues field 0");
@@ -75,7 +85,12 @@ fn an_unchanged_membership_keeps_the_fields_and_a_split_starts_one_more() {
 #[test]
 fn a_member_whose_frame_is_replaced_gets_a_fresh_code_and_the_others_keep_theirs() {
     let mut set = CategoryFieldSet::new(AdamWConfig::default());
-    set.follow(&[subcategory(1, &[1, 2, 3])], 3, 8, &FrameHoldConfig::default());
+    set.follow(
+        &[subcategory(1, &[1, 2, 3])],
+        3,
+        MemberCodes::per_member(8),
+        &FrameHoldConfig::default(),
+    );
     let codes = |set: &CategoryFieldSet| -> Vec<Vec<f32>> {
         let field = set.batch.field(0).expect("one field");
         (0..3).map(|j| field.shape_code(j).expect("member").to_vec()).collect()
@@ -91,7 +106,7 @@ fn a_member_whose_frame_is_replaced_gets_a_fresh_code_and_the_others_keep_theirs
             m.nocs.extents *= 1.1;
         }
     }
-    let places = set.follow(&[moved], 3, 8, &FrameHoldConfig::default());
+    let places = set.follow(&[moved], 3, MemberCodes::per_member(8), &FrameHoldConfig::default());
     let after = codes(&set);
     assert_eq!(
         (after[0] == before[0], after[2] == before[2]),
@@ -113,10 +128,15 @@ fn a_field_no_subcategory_continues_is_recorded_as_dropped() {
     set.follow(
         &[subcategory(1, &[1, 2]), subcategory(5, &[5, 6])],
         3,
-        8,
+        MemberCodes::per_member(8),
         &FrameHoldConfig::default(),
     );
-    set.follow(&[subcategory(1, &[1, 2, 5, 6])], 3, 8, &FrameHoldConfig::default());
+    set.follow(
+        &[subcategory(1, &[1, 2, 5, 6])],
+        3,
+        MemberCodes::per_member(8),
+        &FrameHoldConfig::default(),
+    );
     assert_eq!(
         set.retired,
         vec![RetiredField {

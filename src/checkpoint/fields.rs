@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::TensorStore;
 use crate::error::{CatmapError, Result};
+use crate::field::category::ShapeCodes;
 use crate::field::{AdamWState, CategoryField, OccupancyField};
 
 /// What the state records of an occupancy field.
@@ -34,6 +35,9 @@ pub struct CategoryFieldHeader {
     pub step: u64,
     /// AdamW steps of each member's codes.
     pub code_steps: Vec<u64>,
+    /// Whose shape the field draws for each member (a checkpoint without it: each member's own).
+    #[serde(default)]
+    pub shape_codes: ShapeCodes,
 }
 
 fn store_adam(store: &mut TensorStore, name: &str, adam: &AdamWState) {
@@ -93,6 +97,7 @@ pub fn store_category_field(field: &CategoryField, name: &str, store: &mut Tenso
         scale: field.scale(),
         step: field.optimiser_state().step,
         code_steps,
+        shape_codes: field.shape_codes(),
     }
 }
 
@@ -112,6 +117,7 @@ pub fn load_category_field(
         code_adams.push(take_adam(store, &format!("{name}/code{j}"), step, file)?);
     }
     CategoryField::from_params(header.hidden, header.code_dim, header.scale, params, codes)
+        .map(|f| f.with_shape_codes(header.shape_codes))
         .and_then(|f| f.with_optimiser_states(adam, code_adams))
         .map_err(|e| CatmapError::checkpoint(file, format!("category field {name}: {e}")))
 }

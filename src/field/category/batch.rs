@@ -133,6 +133,9 @@ impl FusedModel for CategoryModel {
             &mut out.weights,
             &mut out.codes,
         );
+        for grad in &mut out.codes {
+            field.shape_codes().fit(grad, field.code_dim());
+        }
         CategoryLosses {
             field: rendering,
             code_reg,

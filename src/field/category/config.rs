@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::member_codes::{MemberCodes, ShapeCodes};
 use crate::objects::cell_rules::UnseenCells;
 
 /// How many rays a category field draws per step.
@@ -29,6 +30,9 @@ pub struct CategoryFieldConfig {
     pub iterations: usize,
     /// Dimension of each member's shape code and of its texture code.
     pub code_dim: usize,
+    /// Whose shape a field draws for each member: its own shape code (METHOD.md §5) or one shape
+    /// for the subcategory ([`ShapeCodes`]).
+    pub shape_codes: ShapeCodes,
     /// Rays per object and step (vMAP's 120), the unit of the ray budget.
     pub rays_per_object: usize,
     /// How the rays of a step are shared out among the category fields.
@@ -54,6 +58,7 @@ impl Default for CategoryFieldConfig {
             enabled: true,
             iterations: 10_000,
             code_dim: 32,
+            shape_codes: ShapeCodes::Shared,
             rays_per_object: 120,
             ray_budget: CategoryRayBudget::PerMember,
             hidden_solid_rays: None,
@@ -64,6 +69,14 @@ impl Default for CategoryFieldConfig {
 }
 
 impl CategoryFieldConfig {
+    /// The codes every member gets.
+    pub fn member_codes(&self) -> MemberCodes {
+        MemberCodes {
+            dim: self.code_dim,
+            shape: self.shape_codes,
+        }
+    }
+
     /// Rays per member and step of a category field with `members` members, in a map of
     /// `objects` objects forming `categories` categories (category fields plus objects on their
     /// own); at least one ray per member.

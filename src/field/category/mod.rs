@@ -1,6 +1,8 @@
 //! The CodeNeRF-style category field (METHOD.md §5): one network per (sub)category, shared by its
 //! members, each member with its own shape code z_s and texture code z_t, trained as one fused
-//! batched step over all categories.
+//! batched step over all categories. By default (`category_fields.shape_codes = "shared"`,
+//! [`ShapeCodes`]) every member's z_s is zero and stays so: one shape per subcategory, each
+//! member's texture its own.
 //!
 //! Points are in the category's NOCS (unit) frame; the vMAP encoding (x' = x / scale, scale 1.0
 //! by default, trainable B) gives e_geo (87) and e_col (42). With W = 32 and code dimension D:
@@ -35,12 +37,14 @@
 //! | `net` | packed layers, the per-member code table, the forward pass |
 //! | `train` | the fused forward + render + loss + backward of a chunk |
 //! | `model` | [`CategoryField`]: weights, codes, optimiser states, evaluation |
+//! | `member_codes` | [`MemberCodes`]: the codes' dimension, and whether a member's shape is its own ([`ShapeCodes`]) |
 //! | `batch` | [`CategoryBatch`]: the category network in the fused step |
 //! | `tensors` | weights and codes as named candle tensors |
 //! | `reference` | the same model in candle autograd |
 
 mod batch;
 mod config;
+mod member_codes;
 mod member_rays;
 mod model;
 mod net;
@@ -50,6 +54,7 @@ mod train;
 
 pub use batch::{CategoryBatch, CategoryGradients, CategoryModel, PreparedCategory};
 pub use config::{CategoryFieldConfig, CategoryRayBudget};
+pub use member_codes::{MemberCodes, ShapeCodes};
 pub use model::CategoryField;
 
 use super::loss::FieldLosses;

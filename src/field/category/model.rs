@@ -9,6 +9,7 @@ use super::super::object_field::FieldEval;
 use super::super::occupancy::Heads;
 use super::super::simd::Backend;
 use super::CODE_REG_WEIGHT;
+use super::member_codes::ShapeCodes;
 use super::net::{CategoryNet, CategoryScratch, Membership};
 use crate::error::{CatmapError, Result};
 use crate::rng::standard_normal_f64 as standard_normal;
@@ -32,6 +33,7 @@ pub struct CategoryField {
     params: Vec<f32>,
     adam: AdamWState,
     members: Vec<MemberCode>,
+    shape_codes: ShapeCodes,
 }
 
 impl CategoryField {
@@ -46,6 +48,7 @@ impl CategoryField {
             adam: AdamWState::new(params.len()),
             params,
             members: Vec::new(),
+            shape_codes: ShapeCodes::PerMember,
         };
         for _ in 0..members {
             field.add_member(rng);
@@ -88,16 +91,33 @@ impl CategoryField {
                     code,
                 })
                 .collect(),
+            shape_codes: ShapeCodes::PerMember,
         })
     }
 
-    /// Adds a member with codes drawn from N(0, 2/D) (CodeNeRF); returns its index. Other
-    /// members' codes and optimiser states are untouched.
+    /// The field with its members' shapes as `shape_codes` says: shared zeroes every member's
+    /// shape code (and every code added later).
+    pub fn with_shape_codes(mut self, shape_codes: ShapeCodes) -> Self {
+        self.shape_codes = shape_codes;
+        for member in &mut self.members {
+            shape_codes.fit(&mut member.code, self.code_dim);
+        }
+        self
+    }
+
+    /// Whose shape the field draws for a member.
+    pub fn shape_codes(&self) -> ShapeCodes {
+        self.shape_codes
+    }
+
+    /// Adds a member with codes drawn from N(0, 2/D) (CodeNeRF; its shape code zero when shapes
+    /// are shared); returns its index. Other members' codes and optimiser states are untouched.
     pub fn add_member(&mut self, rng: &mut impl Rng) -> usize {
         let std = (2.0 / self.code_dim as f64).sqrt();
-        let code: Vec<f32> = (0..2 * self.code_dim)
+        let mut code: Vec<f32> = (0..2 * self.code_dim)
             .map(|_| (std * standard_normal(rng)) as f32)
             .collect();
+        self.shape_codes.fit(&mut code, self.code_dim);
         self.members.push(MemberCode {
             adam: AdamWState::new(code.len()),
             code,
@@ -361,6 +381,30 @@ mod tests {
         let var = codes.iter().map(|v| f64::from(*v).powi(2)).sum::<f64>() / codes.len() as f64;
         assert!((var / (2.0 / 64.0) - 1.0).abs() < 0.1, "variance {var} vs 2/D");
         assert_eq!((field.param_count(), field.code_param_count()), (22_275, 128));
+    }
+
+    #[test]
+    fn a_field_with_one_shape_keeps_every_members_shape_code_zero_and_its_texture_code() {
+        let mut rng = seeded_rng(2, RngStream::Mapper);
+        let own = CategoryField::new(32, 8, 1.0, 2, &mut rng);
+        let mut shared = own.clone().with_shape_codes(ShapeCodes::Shared);
+        for member in 0..2 {
+            assert_eq!(shared.shape_code(member), Some(&[0.0; 8][..]), "member {member}");
+            assert_eq!(shared.texture_code(member), own.texture_code(member));
+        }
+        assert_ne!(own.shape_code(0), Some(&[0.0; 8][..]), "own shapes are drawn");
+        let added = shared.add_member(&mut rng);
+        shared
+            .remap_members(&[Some(added), None, Some(0)], &mut rng)
+            .expect("valid");
+        for member in 0..3 {
+            assert_eq!(
+                shared.shape_code(member),
+                Some(&[0.0; 8][..]),
+                "member {member} after a remap"
+            );
+            assert!(shared.texture_code(member).unwrap().iter().any(|&z| z != 0.0));
+        }
     }
 
     #[test]

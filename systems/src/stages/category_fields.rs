@@ -36,7 +36,12 @@ pub fn sync_category_fields(
     }
     let registered: Vec<_> = categories.iter().collect();
     let groups = registered.iter().flat_map(|s| &s.groups);
-    let places = fields.follow(groups, settings.0.seed, cfg.code_dim, &settings.0.categories.frames);
+    let places = fields.follow(
+        groups,
+        settings.0.seed,
+        cfg.member_codes(),
+        &settings.0.categories.frames,
+    );
     for (entity, object, slot) in &objects {
         match places.get(&object.id) {
             Some(place) if slot.map(|s| &s.0) != Some(place) => {

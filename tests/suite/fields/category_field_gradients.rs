@@ -3,6 +3,7 @@
 //! bit-identical results across thread counts; and a short training run on two spheres.
 
 use candle_core::DType;
+use catmap::field::category::ShapeCodes;
 use catmap::field::category::reference::category_reference;
 use catmap::field::reference::worst_tensor_error;
 use catmap::field::{AdamWConfig, Backend, CategoryBatch, CategoryField, CategorySamples, RaySamples};
@@ -320,6 +321,58 @@ fn two_spheres_train_into_two_shapes_of_one_category() {
     let colour = field.eval(1, &shell(0.6)).expect("member exists").colour;
     let green = mean(&colour.iter().map(|c| c[1] - c[0]).collect::<Vec<_>>());
     assert!(green > 0.2, "the larger sphere is green at its surface ({green})");
+}
+
+#[test]
+fn members_of_a_field_with_one_shape_draw_one_shape_in_their_own_colours() {
+    let mut rng = seeded_rng(7, RngStream::Mapper);
+    let mut batch = CategoryBatch::new(AdamWConfig::default());
+    batch.push(CategoryField::new(32, 32, 1.0, 2, &mut rng).with_shape_codes(ShapeCodes::Shared));
+    for _ in 0..300 {
+        let mut s = CategorySamples::default();
+        sphere_rays(&mut rng, 0.5, [0.9, 0.1, 0.1], 120, &mut s.rays);
+        s.members.extend([0; 120]);
+        sphere_rays(&mut rng, 0.5, [0.1, 0.9, 0.1], 120, &mut s.rays);
+        s.members.extend([1; 120]);
+        batch.train_step(&[s]).expect("valid samples");
+    }
+    let field = &batch.fields()[0];
+    for member in 0..2 {
+        let code = field.shape_code(member).expect("member exists");
+        assert!(
+            code.iter().all(|&z| z == 0.0),
+            "member {member}'s shape code stays zero"
+        );
+    }
+    let mut dirs = seeded_rng(8, RngStream::Mapper);
+    let points: Vec<[f32; 3]> = (0..300)
+        .map(|i| {
+            let v: [f32; 3] = std::array::from_fn(|_| dirs.random_range(-1.0f32..1.0));
+            let n = v.iter().map(|x| x * x).sum::<f32>().sqrt().max(1e-3);
+            let r = 0.3 + 0.5 * (i % 3) as f32 / 2.0;
+            v.map(|x| r * x / n)
+        })
+        .collect();
+    let (first, second) = (
+        field.eval_occupancy(0, &points).expect("member 0"),
+        field.eval_occupancy(1, &points).expect("member 1"),
+    );
+    assert_eq!(first, second, "one shape for both members");
+    assert!(
+        first.iter().any(|&o| o > 0.5) && first.iter().any(|&o| o < 0.5),
+        "a surface between"
+    );
+    let surface: Vec<[f32; 3]> = points.iter().step_by(3).map(|p| p.map(|x| x * 0.5 / 0.3)).collect();
+    let green = |member: usize| {
+        let colour = field.eval(member, &surface).expect("member exists").colour;
+        colour.iter().map(|c| c[1] - c[0]).sum::<f32>() / colour.len() as f32
+    };
+    assert!(
+        green(1) > 0.2 && green(0) < -0.2,
+        "each member keeps its colour: green − red {} and {}",
+        green(0),
+        green(1)
+    );
 }
 
 #[test]
