@@ -151,6 +151,18 @@ mod tests {
         middle: Point3<f32>,
     }
 
+    impl Chairs {
+        /// How far the member's alignment fitted to its subcategory is from the truth.
+        fn fitted_error(self) -> (f32, f32) {
+            let fitted = refined_against(self.group, &self.clouds, &cfg(AlignmentTemplate::Subcategory), 0).unwrap();
+            error(
+                &fitted.members[&ObjectId(3)].template_from_object,
+                &self.truth,
+                &self.middle,
+            )
+        }
+    }
+
     fn chairs(member_chamfer: f32, start_off: Isometry3<f32>) -> Chairs {
         let surface = chair_surface();
         let (rep, twin, member) = (ObjectId(1), ObjectId(2), ObjectId(3));
@@ -244,35 +256,9 @@ mod tests {
     #[test]
     fn a_member_that_fits_its_representative_badly_is_searched_over_its_subcategory() {
         let off = pose(0.0, 0.0, 60.0);
-        let member = ObjectId(3);
-        let refine_only = chairs(0.01, off);
-        let refined = refined_against(
-            refine_only.group,
-            &refine_only.clouds,
-            &cfg(AlignmentTemplate::Subcategory),
-            0,
-        )
-        .unwrap();
-        let (turn, _) = error(
-            &refined.members[&member].template_from_object,
-            &refine_only.truth,
-            &refine_only.middle,
-        );
+        let (turn, _) = chairs(0.01, off).fitted_error();
         assert!(turn > 10.0, "ICP alone does not turn 60°: {turn}°");
-
-        let searched = chairs(0.05, off);
-        let found = refined_against(
-            searched.group,
-            &searched.clouds,
-            &cfg(AlignmentTemplate::Subcategory),
-            0,
-        )
-        .unwrap();
-        let (turn, shift) = error(
-            &found.members[&member].template_from_object,
-            &searched.truth,
-            &searched.middle,
-        );
+        let (turn, shift) = chairs(0.05, off).fitted_error();
         assert!(
             turn < 1.0 && shift < 1.0,
             "searched over the subcategory: {turn}° {shift} cm"
