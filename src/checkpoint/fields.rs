@@ -142,9 +142,15 @@ mod tests {
         field = field.with_optimiser_state(moved).expect("fits");
         let mut category = CategoryField::new(32, 8, 1.0, 3, &mut rng);
         category.code_mut(1).expect("member 1")[0] = 0.25;
+        let shared = CategoryField::new(32, 8, 1.0, 2, &mut rng).with_shape_codes(ShapeCodes::Shared);
         let mut store = TensorStore::new();
         let h = store_occupancy_field(&field, "objects/3", &mut store);
         let c = store_category_field(&category, "categories/0", &mut store);
+        let s = store_category_field(&shared, "categories/1", &mut store);
+        assert_eq!(
+            (c.shape_codes, s.shape_codes),
+            (ShapeCodes::PerMember, ShapeCodes::Shared)
+        );
         let file = Path::new("tensors.safetensors");
         let mut back = TensorStore::from_safetensors(&store.to_safetensors().expect("encodes"), file).expect("decodes");
         assert_eq!(
@@ -154,6 +160,15 @@ mod tests {
         assert_eq!(
             load_category_field(&c, "categories/0", &mut back, file).expect("loads"),
             category
+        );
+        let shared_back = load_category_field(&s, "categories/1", &mut back, file).expect("loads");
+        assert_eq!(shared_back, shared, "a shared shape comes back shared");
+        let before = r#"{"hidden": 32, "code_dim": 8, "scale": 1.0, "step": 0, "code_steps": []}"#;
+        let old: CategoryFieldHeader = serde_json::from_str(before).expect("a header of before");
+        assert_eq!(
+            old.shape_codes,
+            ShapeCodes::PerMember,
+            "a checkpoint of before had its own shapes"
         );
         assert!(back.is_empty(), "every tensor was used");
         let err = load_occupancy_field(&h, "objects/3", &mut back, file)
