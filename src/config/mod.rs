@@ -18,6 +18,7 @@ pub use phases::{AfterStream, FirstPhase};
 pub use rerun::RerunConfig;
 
 use crate::error::{CatmapError, Result};
+use crate::geometry::face_normals_turn::BoxTurn;
 use crate::sensor::depth_smoothing::{DepthImages, DepthSmoothing};
 
 /// Everything the mapper can be told. `catmap config` prints the defaults as TOML.
@@ -97,7 +98,8 @@ impl MapperConfig {
     /// bilateral filter of [`crate::sensor::depth_smoothing`]), its boxes fitted to the cloud
     /// voxels with at least 3 points (`objects.box_min_voxel_points`: its strays left out),
     /// moved onto their local surfaces (`objects.box_smoothing_m`, [`crate::objects::config::CAMERA_BOX_SMOOTHING_M`]),
-    /// and the views allow for its noise (`dataset.depth_noise_per_m2`); exact ones get none of
+    /// upright boxes of objects made mostly of upright faces turned to their normals
+    /// (`objects.box_turn`), and the views allow for its noise (`dataset.depth_noise_per_m2`); exact ones get none of
     /// it and keep the masks' box rule. Measured in docs/ROBUSTNESS.md.
     pub fn with_depth_images(mut self, depth: DepthImages) -> Self {
         let (smoothing, depth_noise_per_m2) = match depth {
@@ -109,8 +111,10 @@ impl MapperConfig {
         if depth == DepthImages::Camera {
             self.objects.box_min_voxel_points = self.objects.box_min_voxel_points.max(3);
             self.objects.box_smoothing_m = crate::objects::config::CAMERA_BOX_SMOOTHING_M;
+            self.objects.box_turn = BoxTurn::FaceNormals;
         } else {
             self.objects.box_smoothing_m = 0.0;
+            self.objects.box_turn = BoxTurn::Rectangle;
         }
         self
     }
@@ -225,8 +229,10 @@ mod tests {
         );
         assert_eq!(camera.objects.box_min_voxel_points, 3);
         assert_eq!(camera.objects.box_smoothing_m, 0.08, "on their local surfaces");
+        assert_eq!(camera.objects.box_turn, BoxTurn::FaceNormals);
         let exact = camera.with_depth_images(DepthImages::Exact);
         assert_eq!(exact.objects.box_smoothing_m, 0.0);
+        assert_eq!(exact.objects.box_turn, BoxTurn::Rectangle);
         assert_eq!(exact.dataset, MapperConfig::default().dataset);
         assert_eq!(exact.objects.box_min_voxel_points, 3, "the masks' to reset");
         assert_eq!(

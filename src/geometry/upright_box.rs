@@ -26,6 +26,7 @@
 
 use nalgebra::{Point3, Vector2, Vector3};
 
+use super::face_normals_turn::BoxTurn;
 use super::oriented_box::{OrientedBox, centred_cloud, fit_around_axis};
 use crate::error::Result;
 
@@ -76,14 +77,15 @@ pub fn base_slab_top(heights: impl IntoIterator<Item = f64>) -> Option<f64> {
 }
 
 /// The upright box of `points` turned so that its observed faces lie on its sides where the
-/// least footprint's turn leaves them off (module doc). Errors as [`fit_upright_box`] does.
-pub fn fit_upright_box_on_faces(points: &[Point3<f32>]) -> Result<OrientedBox> {
+/// least footprint's turn leaves them off (module doc), then as `turn` says
+/// ([`super::face_normals_turn`]). Errors as [`fit_upright_box`] does.
+pub fn fit_upright_box_on_faces(points: &[Point3<f32>], turn: BoxTurn) -> Result<OrientedBox> {
     let (mean, centred) = centred_cloud(points)?;
     let above = footprint_points(&centred);
     let mut fit = fit_around_axis(&above, Vector3::z());
     let footprint: Vec<Vector2<f64>> = above.iter().map(|p| Vector2::new(p.x, p.y)).collect();
     let least = Vector2::new(fit.axes[0].x, fit.axes[0].y);
-    let x = turn_with_faces_on_sides(&footprint, least);
+    let x = turn.turned(&centred, turn_with_faces_on_sides(&footprint, least));
     fit.axes = [Vector3::new(x.x, x.y, 0.0), Vector3::new(-x.y, x.x, 0.0), Vector3::z()];
     fit.measure_upright(&above, &centred);
     Ok(fit.into_box(mean))

@@ -3,6 +3,7 @@
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector2, Vector3};
 
 use super::*;
+use crate::geometry::face_normals_turn::BoxTurn;
 use crate::geometry::oriented_box::fit_minimum_volume_box;
 use crate::geometry::oriented_box::tests::box_surface;
 
@@ -92,7 +93,7 @@ fn a_cabinet_seen_from_a_corner_gets_its_box_turned_as_its_faces() {
         "the least footprint lies along the L's diagonal: {}°",
         turn_deg(&least)
     );
-    let on_faces = fit_upright_box_on_faces(&points).expect("ok");
+    let on_faces = fit_upright_box_on_faces(&points, BoxTurn::Rectangle).expect("ok");
     assert!(
         turn_gap_deg(turn_deg(&on_faces), 62.0) < 0.5,
         "turned as the faces: {}°",
@@ -109,7 +110,7 @@ fn a_cabinet_seen_from_a_corner_gets_its_box_turned_as_its_faces() {
 /// Asserts that both upright fits of `points` give the same box (turn and extents).
 fn assert_same_upright_box(points: &[Point3<f32>]) {
     let least = fit_upright_box(points).expect("ok");
-    let on_faces = fit_upright_box_on_faces(points).expect("ok");
+    let on_faces = fit_upright_box_on_faces(points, BoxTurn::Rectangle).expect("ok");
     let turn = least
         .world_from_box
         .rotation
@@ -137,7 +138,8 @@ fn a_box_seen_whole_or_a_round_object_keeps_its_least_footprint() {
         })
         .collect();
     assert_same_upright_box(&shade);
-    assert!(fit_upright_box_on_faces(&[]).is_err());
+    assert!(fit_upright_box_on_faces(&[], BoxTurn::Rectangle).is_err());
+    assert!(fit_upright_box_on_faces(&[], BoxTurn::FaceNormals).is_err());
 }
 
 #[test]
@@ -188,7 +190,8 @@ fn floor_points_beside_the_feet_stay_out_of_the_footprint_but_not_out_of_the_hei
     for k in 0..10 {
         bled.push(turn * Point3::new(-0.15 + k as f32 * 0.03, 0.21, 0.005));
     }
-    for fit in [fit_upright_box, fit_upright_box_on_faces] {
+    let on_faces = |p: &[Point3<f32>]| fit_upright_box_on_faces(p, BoxTurn::Rectangle);
+    for fit in [fit_upright_box, on_faces] {
         let (a, b) = (fit(&clean).expect("a box"), fit(&bled).expect("a box"));
         assert!(
             (a.extents() - b.extents()).abs().max() < 1e-4,
@@ -209,4 +212,44 @@ fn floor_points_beside_the_feet_stay_out_of_the_footprint_but_not_out_of_the_hei
         .collect();
     let flat = fit_upright_box(&rug).expect("a box");
     assert!((flat.extents().x - 0.9).abs() < 1e-4, "{:?}", flat.extents());
+}
+
+/// [`cabinet_seen_from_a_corner`] through a noisy camera: every point moved by N(0, σ²) along
+/// each axis, seeded.
+fn noisy_cabinet(turn_deg: f32, sigma_m: f32, seed: u64) -> Vec<Point3<f32>> {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    cabinet_seen_from_a_corner(turn_deg)
+        .into_iter()
+        .map(|p| p + Vector3::from_fn(|_, _| sigma_m * crate::rng::standard_normal_f32(&mut rng)))
+        .collect()
+}
+
+#[test]
+fn a_noisy_cabinets_box_is_turned_as_its_faces_normals_not_as_its_noises_tails() {
+    let (mut rectangle, mut normals) = (0.0f32, 0.0f32);
+    for seed in 0..5 {
+        let points = noisy_cabinet(62.0, 0.01, seed);
+        let on_faces = fit_upright_box_on_faces(&points, BoxTurn::Rectangle).expect("ok");
+        let on_normals = fit_upright_box_on_faces(&points, BoxTurn::FaceNormals).expect("ok");
+        rectangle = rectangle.max(turn_gap_deg(turn_deg(&on_faces), 62.0));
+        normals = normals.max(turn_gap_deg(turn_deg(&on_normals), 62.0));
+    }
+    assert!(normals < 0.5, "turned as the faces' normals: within {normals}°");
+    assert!(
+        rectangle > 2.0 * normals,
+        "the rectangle's turn strays more: {rectangle}° against {normals}°"
+    );
+}
+
+#[test]
+fn a_stool_without_upright_faces_keeps_the_rectangles_turn() {
+    let points = stool();
+    let rectangle = fit_upright_box_on_faces(&points, BoxTurn::Rectangle).expect("ok");
+    let normals = fit_upright_box_on_faces(&points, BoxTurn::FaceNormals).expect("ok");
+    assert_eq!(
+        turn_deg(&normals),
+        turn_deg(&rectangle),
+        "legs and a flat top are no faces"
+    );
 }

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::geometry::face_normals_turn::BoxTurn;
 use crate::objects::border_votes::BorderVotes;
 use crate::objects::instance_association::AssociationConfig;
 use crate::objects::mask_trim::BandInFront;
@@ -50,6 +51,11 @@ pub struct ObjectConfig {
     /// How the oriented box is fitted to the thinned cloud. `None`: the schedule's choice
     /// ([`crate::config::MapperConfig::object_settings`]).
     pub box_fit: Option<BoxFit>,
+    /// How an upright box (`box_fit` `upright_on_faces`) is turned once its rectangle is fitted:
+    /// `rectangle` (the default, exact depth), or `face_normals` under `--depth camera` — an
+    /// object made mostly of upright faces turned to their normals' median turn (a depth
+    /// camera's noise turns the rectangle; [`crate::geometry::face_normals_turn`]).
+    pub box_turn: BoxTurn,
     /// A mask pixel whose depth lies more than `bleed_depth_m` beyond the nearest pixel of its
     /// object within this many pixels is a mask bleeding onto what lies behind, and becomes
     /// unknown ([`crate::objects::mask_trim`]); 0 (the default) turns the check off: at 2 px it
@@ -146,6 +152,7 @@ impl Default for ObjectConfig {
             background_pixel_stride: 4,
             background_voxel_m: 0.05,
             box_fit: None,
+            box_turn: BoxTurn::Rectangle,
             bleed_radius_px: 0,
             bleed_depth_m: 0.1,
             bleed_depth_per_m: 0.0,

@@ -191,7 +191,7 @@ pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &Object
     let oriented_box = match cfg.box_fit.unwrap_or_default() {
         BoxFit::MinimumVolume => fit_minimum_volume_box(&thinned)?,
         BoxFit::Upright => fit_upright_box(&thinned)?,
-        BoxFit::UprightOnFaces => fit_upright_box_on_faces(&thinned)?,
+        BoxFit::UprightOnFaces => fit_upright_box_on_faces(&thinned, cfg.box_turn)?,
     };
     let oriented_box = oriented_box.with_min_extent(cfg.min_extent_m);
     let mirror = match mirror {
