@@ -7,6 +7,7 @@ pub mod mesh;
 pub mod mirror_symmetry;
 pub mod nearest;
 pub mod oriented_box;
+pub mod round_axis;
 pub mod tolerance_grid;
 pub mod tracked_nearest;
 pub mod upright_box;

@@ -56,6 +56,11 @@ pub struct ObjectConfig {
     /// object made mostly of upright faces turned to their normals' median turn (a depth
     /// camera's noise turns the rectangle; [`crate::geometry::face_normals_turn`]).
     pub box_turn: BoxTurn,
+    /// Whether a round object whose mirror search finds no plane at right angles to its first
+    /// takes the plane through its axis of revolution instead (`across_axis`, the default: a
+    /// lamp seen from one side gets its unseen back; [`crate::geometry::round_axis`]) or none
+    /// (`off`).
+    pub round_objects: RoundObjects,
     /// A mask pixel whose depth lies more than `bleed_depth_m` beyond the nearest pixel of its
     /// object within this many pixels is a mask bleeding onto what lies behind, and becomes
     /// unknown ([`crate::objects::mask_trim`]); 0 (the default) turns the check off: at 2 px it
@@ -122,6 +127,18 @@ impl ObjectConfig {
     }
 }
 
+/// What a round object's second mirror plane is (`objects.round_objects`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RoundObjects {
+    /// The vertical plane through its axis of revolution at right angles to its first plane,
+    /// when no plane there matches and its points lie on circles about an axis in the first.
+    #[default]
+    AcrossAxis,
+    /// Only a plane whose reflections match (the mirror search alone, as before session 49).
+    Off,
+}
+
 /// How an object's oriented box is fitted to its observed cloud.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -153,6 +170,7 @@ impl Default for ObjectConfig {
             background_voxel_m: 0.05,
             box_fit: None,
             box_turn: BoxTurn::Rectangle,
+            round_objects: RoundObjects::AcrossAxis,
             bleed_radius_px: 0,
             bleed_depth_m: 0.1,
             bleed_depth_per_m: 0.0,

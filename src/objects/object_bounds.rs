@@ -6,8 +6,9 @@ use crate::error::{CatmapError, Result};
 use crate::geometry::local_surfaces::onto_local_surfaces;
 use crate::geometry::mirror_symmetry::{MirrorDirections, MirrorPlane, SymmetryConfig, find_vertical_mirrors};
 use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box};
+use crate::geometry::round_axis::plane_across_axis;
 use crate::geometry::upright_box::{fit_upright_box, fit_upright_box_on_faces};
-use crate::objects::config::{BoxFit, ObjectConfig};
+use crate::objects::config::{BoxFit, ObjectConfig, RoundObjects};
 use crate::objects::observed_cloud::{ObservedCloud, voxel_downsample};
 use crate::training::{StreamPhase, takes_shape_priors};
 use rayon::prelude::*;
@@ -198,9 +199,13 @@ pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &Object
         MirrorStep::Search => {
             let (yaw, symmetry) = (oriented_box.yaw(), SymmetryConfig::default());
             let (first, second) = find_vertical_mirrors(&thinned, &symmetry, MirrorDirections::BoxAxesFirst { yaw });
+            let across_axis = || match cfg.round_objects {
+                RoundObjects::AcrossAxis => first.and_then(|f| plane_across_axis(&thinned, &f.plane)),
+                RoundObjects::Off => None,
+            };
             Some(MirrorFit {
                 plane: first.map(|f| f.plane),
-                second: second.map(|f| f.plane),
+                second: second.map(|f| f.plane).or_else(across_axis),
                 fitted_at_points: cloud.len(),
             })
         }
@@ -398,3 +403,7 @@ mod tests {
 #[cfg(test)]
 #[path = "object_bounds_noise_tests.rs"]
 mod noise_tests;
+
+#[cfg(test)]
+#[path = "object_bounds_round_tests.rs"]
+mod round_tests;
