@@ -101,4 +101,4 @@ fn arc_deg(placed: &[(f32, f32, i64)], t: f32) -> f32 {
 
 #[cfg(test)]
 #[path = "round_axis_tests.rs"]
-mod tests;
+pub(crate) mod tests;

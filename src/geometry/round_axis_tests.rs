@@ -6,24 +6,24 @@ use super::*;
 
 /// A lamp at (`cx`, `cy`) seen from −x: the half of its shade (a cone, radius 0.21 → 0.09 m over
 /// 1.3–1.6 m), its pole (radius 1.2 cm) and its base's rim (radius 0.16 m, 5 cm tall) facing −x,
-/// every 2 cm / 10°.
-fn lamp_seen_from_minus_x(cx: f32, cy: f32) -> Vec<Point3<f32>> {
+/// a ring every `dz` metres of height with a point every `step_deg` degrees.
+pub(crate) fn lamp_seen_from_minus_x(cx: f32, cy: f32, dz: f32, step_deg: f32) -> Vec<Point3<f32>> {
     let mut points = Vec::new();
     let mut ring = |radius: f32, z: f32| {
-        for k in 0..=18 {
-            let a = (90.0 + 10.0 * k as f32).to_radians(); // 90°..270°: the −x half
+        for k in 0..=(180.0 / step_deg) as usize {
+            let a = (90.0 + step_deg * k as f32).to_radians(); // 90°..270°: the −x half
             points.push(Point3::new(cx + radius * a.cos(), cy + radius * a.sin(), z));
         }
     };
-    for i in 0..=15 {
-        let z = 1.3 + 0.02 * i as f32;
+    let rings = |from: f32, to: f32| (0..=((to - from) / dz).round() as usize).map(move |i| from + dz * i as f32);
+    for z in rings(1.3, 1.6) {
         ring(0.21 - 0.12 * (z - 1.3) / 0.3, z);
     }
-    for i in 0..60 {
-        ring(0.012, 0.06 + 0.02 * i as f32);
+    for z in rings(0.06, 1.24) {
+        ring(0.012, z);
     }
-    for i in 0..3 {
-        ring(0.16, 0.02 * i as f32);
+    for z in rings(0.0, 0.04) {
+        ring(0.16, z);
     }
     points
 }
@@ -31,7 +31,7 @@ fn lamp_seen_from_minus_x(cx: f32, cy: f32) -> Vec<Point3<f32>> {
 #[test]
 fn a_lamp_seen_from_one_side_gets_the_plane_across_the_views_through_its_pole() {
     let (cx, cy) = (2.7, 1.5);
-    let points = lamp_seen_from_minus_x(cx, cy);
+    let points = lamp_seen_from_minus_x(cx, cy, 0.02, 10.0);
     // The plane along the views: normal y, through the pole.
     let first = MirrorPlane {
         normal: Vector3::y(),
