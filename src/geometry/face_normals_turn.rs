@@ -18,9 +18,10 @@
 //! nearer the truth; an armchair seen from its front is 90–100 % faces over its first ~1000
 //! thinned points (≤ 870 voting), the cabinet 84–90 % over 1700–4900 (1450–4100 voting).
 
-use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector2, Vector3};
+use nalgebra::{Point3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
+use super::local_plane::LocalPlane;
 use super::nearest::PointIndex;
 
 /// How an upright box is turned about up once its rectangle is fitted.
@@ -111,23 +112,13 @@ fn median(mut offsets: Vec<f64>) -> Option<f64> {
 }
 
 /// The normal of the plane through `neighbours` when they lie on an upright face (module doc).
-fn upright_face_normal(neighbours: impl Iterator<Item = Vector3<f64>>) -> Option<Vector3<f64>> {
-    let near: Vec<Vector3<f64>> = neighbours.collect();
-    if near.len() < MIN_FACE_NEIGHBOURS {
+fn upright_face_normal(neighbours: impl Iterator<Item = Vector3<f64>> + Clone) -> Option<Vector3<f64>> {
+    if neighbours.clone().count() < MIN_FACE_NEIGHBOURS {
         return None;
     }
-    let n = near.len() as f64;
-    let mean = near.iter().sum::<Vector3<f64>>() / n;
-    let spread: Matrix3<f64> = near
-        .iter()
-        .map(|p| (p - mean) * (p - mean).transpose())
-        .sum::<Matrix3<f64>>()
-        / n;
-    let eigen = SymmetricEigen::new(spread);
-    let mut order = [0, 1, 2];
-    order.sort_by(|a, b| eigen.eigenvalues[*a].total_cmp(&eigen.eigenvalues[*b]));
-    let normal = eigen.eigenvectors.column(order[0]).into_owned();
-    let flat = eigen.eigenvalues[order[0]] <= FACE_FLATNESS * eigen.eigenvalues[order[1]];
+    let plane = LocalPlane::fit(neighbours)?;
+    let normal = plane.normal();
+    let flat = plane.spreads[0] <= FACE_FLATNESS * plane.spreads[1];
     (flat && normal.z.abs() <= FACE_MAX_NORMAL_Z).then_some(normal)
 }
 

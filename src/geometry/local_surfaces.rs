@@ -18,9 +18,10 @@
 //! thin leg: a line, its middle spread under [`MIN_SECOND_SPREAD`]; a corner seen closely), stay
 //! where they are; where the quadric has no unique fit, the plane is taken.
 
-use nalgebra::{Matrix3, Matrix6, Point3, SymmetricEigen, Vector3, Vector6};
+use nalgebra::{Matrix6, Point3, Vector3, Vector6};
 use rayon::prelude::*;
 
+use super::local_plane::LocalPlane;
 use super::nearest::PointIndex;
 
 /// Fewest points within the radius (the point itself included) for a plane to be fitted.
@@ -57,33 +58,17 @@ pub fn onto_local_surfaces(points: &[Point3<f32>], reference: &[Point3<f32>], ra
             if near.len() < MIN_NEIGHBOURS {
                 return *p;
             }
-            let n = near.len() as f64;
-            let centre: Vector3<f64> = near
-                .iter()
-                .map(|&i| index.point(i).coords.cast::<f64>())
-                .sum::<Vector3<f64>>()
-                / n;
-            let covariance: Matrix3<f64> = near
-                .iter()
-                .map(|&i| {
-                    let d = index.point(i).coords.cast::<f64>() - centre;
-                    d * d.transpose()
-                })
-                .sum::<Matrix3<f64>>()
-                / n;
-            let eigen = SymmetricEigen::new(covariance);
-            let mut order = [0, 1, 2];
-            order.sort_by(|&a, &b| eigen.eigenvalues[a].total_cmp(&eigen.eigenvalues[b]));
-            let [smallest, middle, _] = order;
-            let total = eigen.eigenvalues.sum();
-            if total <= 0.0
-                || eigen.eigenvalues[smallest] > MAX_FLATNESS * total
-                || eigen.eigenvalues[middle] < MIN_SECOND_SPREAD * total
-            {
+            let Some(plane) = LocalPlane::fit(near.iter().map(|&i| index.point(i).coords.cast::<f64>())) else {
+                return *p;
+            };
+            let [smallest, middle, _] = plane.spreads;
+            let total: f64 = plane.spreads.iter().sum();
+            if total <= 0.0 || smallest > MAX_FLATNESS * total || middle < MIN_SECOND_SPREAD * total {
                 return *p;
             }
-            let normal = eigen.eigenvectors.column(smallest).into_owned();
-            let along = [order[2], middle].map(|k| eigen.eigenvectors.column(k).into_owned());
+            let centre = plane.centre;
+            let normal = plane.normal();
+            let along = [plane.axes[2], plane.axes[1]];
             let d = p.coords.cast::<f64>() - centre;
             let height = quadric_height(&near, &index, &centre, &normal, &along, &d).unwrap_or(0.0);
             Point3::from((p.coords.cast::<f64>() - normal * (d.dot(&normal) - height)).cast::<f32>())

@@ -2,6 +2,7 @@
 //! their PLY files.
 
 pub mod face_normals_turn;
+pub mod local_plane;
 pub mod local_surfaces;
 pub mod mesh;
 pub mod mirror_symmetry;

@@ -41,25 +41,26 @@ pub fn plane_across_axis(points: &[Point3<f32>], first: &MirrorPlane) -> Option<
     }
     let n = Vector3::new(first.normal.x, first.normal.y, 0.0).try_normalize(1e-6)?;
     let along = Vector3::new(-n.y, n.x, 0.0);
-    // Each point: its place along the plane, its distance off it, its slice.
-    let placed: Vec<(f32, f32, i64)> = points
+    // Each point's place along the plane and distance off it, grouped by height slice (once).
+    let mut slices: std::collections::BTreeMap<i64, Vec<(f32, f32)>> = std::collections::BTreeMap::new();
+    for p in points {
+        let placed = (p.coords.dot(&along), p.coords.dot(&n) - first.offset);
+        slices.entry((p.z / SLICE_M).floor() as i64).or_default().push(placed);
+    }
+    let slices: Vec<Vec<(f32, f32)>> = slices.into_values().collect();
+    let (lo, hi) = slices
         .iter()
-        .map(|p| {
-            let (s, w) = (p.coords.dot(&along), p.coords.dot(&n) - first.offset);
-            (s, w, (p.z / SLICE_M).floor() as i64)
-        })
-        .collect();
-    let (lo, hi) = placed
-        .iter()
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &(s, _, _)| {
+        .flatten()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &(s, _)| {
             (lo.min(s), hi.max(s))
         });
     let steps = ((hi - lo) / STEP_M).ceil() as usize;
-    let (share, t) = (0..=steps)
+    let mut radii = Vec::new();
+    let (on_circles, t) = (0..=steps)
         .map(|k| lo + k as f32 * STEP_M)
-        .map(|t| (round_share(&placed, t), t))
-        .fold((0.0f32, lo), |best, c| if c.0 > best.0 { c } else { best });
-    if share < MIN_ROUND_SHARE || arc_deg(&placed, t) < MIN_ARC_DEG {
+        .map(|t| (on_their_circles(&slices, t, &mut radii), t))
+        .fold((0, lo), |best, c| if c.0 > best.0 { c } else { best });
+    if (on_circles as f32) < MIN_ROUND_SHARE * points.len() as f32 || arc_deg(&slices, t) < MIN_ARC_DEG {
         return None;
     }
     Some(MirrorPlane {
@@ -68,16 +69,14 @@ pub fn plane_across_axis(points: &[Point3<f32>], first: &MirrorPlane) -> Option<
     })
 }
 
-/// Share of the points within [`RADIUS_TOLERANCE_M`] of their slice's median distance to the
-/// axis at `t` along the plane.
-fn round_share(placed: &[(f32, f32, i64)], t: f32) -> f32 {
-    let mut slices: std::collections::BTreeMap<i64, Vec<f32>> = std::collections::BTreeMap::new();
-    for &(s, w, slice) in placed {
-        slices.entry(slice).or_default().push((s - t).hypot(w));
-    }
-    let on_circle: usize = slices
-        .values_mut()
-        .map(|radii| {
+/// How many points lie within [`RADIUS_TOLERANCE_M`] of their slice's median distance to the
+/// axis at `t` along the plane (`radii`: a buffer reused between calls).
+fn on_their_circles(slices: &[Vec<(f32, f32)>], t: f32, radii: &mut Vec<f32>) -> usize {
+    slices
+        .iter()
+        .map(|slice| {
+            radii.clear();
+            radii.extend(slice.iter().map(|&(s, w)| (s - t).hypot(w)));
             radii.sort_by(f32::total_cmp);
             let median = radii[radii.len() / 2];
             radii
@@ -85,14 +84,13 @@ fn round_share(placed: &[(f32, f32, i64)], t: f32) -> f32 {
                 .filter(|r| (*r - median).abs() <= RADIUS_TOLERANCE_M)
                 .count()
         })
-        .sum();
-    on_circle as f32 / placed.len() as f32
+        .sum()
 }
 
 /// The turn about the axis at `t` the points cover, in whole 10° sectors, degrees.
-fn arc_deg(placed: &[(f32, f32, i64)], t: f32) -> f32 {
+fn arc_deg(slices: &[Vec<(f32, f32)>], t: f32) -> f32 {
     let mut sectors = [false; 36];
-    for &(s, w, _) in placed {
+    for &(s, w) in slices.iter().flatten() {
         let angle = w.atan2(s - t).to_degrees().rem_euclid(360.0);
         sectors[(angle / 10.0) as usize % 36] = true;
     }
