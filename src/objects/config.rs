@@ -85,6 +85,13 @@ pub struct ObjectConfig {
     /// object's label (`kept`, the default) or are unsure like the rest of the band
     /// ([`crate::objects::mask_trim::spare_pixels_in_front`]).
     pub band_in_front: BandInFront,
+    /// How far beyond a band pixel's depth z everything across its border must lie for it to
+    /// count as in front: `bleed_depth_m` + this × z metres. A grown pixel shows the surface
+    /// behind at the depth of the pixels across its border, so the allowance only has to cover
+    /// the depth's noise and a surface falling away at a grazing angle within a few pixels
+    /// (0.1 m + 0.03 × 3 m = 0.19 m at 3 m, where the bleed trim's 0.1 per metre asks 0.4 m and
+    /// an armchair's side stretcher 0.3 m before the floor lost its band).
+    pub in_front_depth_per_m: f32,
     /// Where object ids come from: the dataset's (consistent) ids, or per-frame masks associated
     /// into objects ([`crate::objects::instance_association`]).
     pub association: AssociationConfig,
@@ -177,6 +184,7 @@ impl Default for ObjectConfig {
             mask_border_px: 0,
             border_votes: BorderVotes::default(),
             band_in_front: BandInFront::default(),
+            in_front_depth_per_m: 0.03,
             association: AssociationConfig::default(),
         }
     }

@@ -15,11 +15,13 @@
 //!
 //! [`spare_pixels_in_front`] gives some of the band back: a mask pixel that lies in front of
 //! everything across its border — every pixel of another label within reach that has a depth is
-//! farther by more than the bleed allowance — is its object's. Had the mask grown there, its
-//! grown pixels would show what lies behind and the bleed trim would have taken them; so only
-//! where the object meets a surface at its own depth (the floor under a leg, the wall it stands
-//! against, a neighbour) does its border stay unsure. A lamp's pole 4–5 px wide in front of a
-//! wall keeps its inner pixels instead of losing every one to the band.
+//! farther by more than `bleed_depth_m` + `in_front_depth_per_m` × its depth — is its object's.
+//! Had the mask grown there, its grown pixels would show what lies behind, at about the depth of
+//! the pixels across their border, and would not be in front of them; so only where the object
+//! meets a surface at its own depth (the floor under a leg, the wall it stands against, a
+//! neighbour) does its border stay unsure. A lamp's pole 4–5 px wide in front of a wall keeps its
+//! inner pixels instead of losing every one to the band, and an armchair's side stretcher 0.3 m
+//! before the floor behind it keeps its rows.
 
 use serde::{Deserialize, Serialize};
 
@@ -82,8 +84,8 @@ pub enum BandInFront {
 
 /// Takes out of `band` (of `radius_px`) the mask pixels of `frame` in front of everything across
 /// their border (module doc): every pixel of another label within `radius_px` + 1 (a square
-/// window) that has a depth lies more than `bleed_depth_m` + `bleed_depth_per_m` · z beyond the
-/// pixel's depth z, and at least one does.
+/// window) that has a depth lies more than `bleed_depth_m` + `in_front_depth_per_m` · z beyond
+/// the pixel's depth z, and at least one does.
 pub fn spare_pixels_in_front(frame: &RgbdFrame, band: &mut [bool], radius_px: u32, cfg: &ObjectConfig) {
     let r = i64::from(radius_px) + 1;
     let (w, h) = (frame.intrinsics.width as i64, frame.intrinsics.height as i64);
@@ -97,7 +99,7 @@ pub fn spare_pixels_in_front(frame: &RgbdFrame, band: &mut [bool], radius_px: u3
             if z.is_nan() || z <= 0.0 {
                 return false;
             }
-            let beyond = z + cfg.bleed_depth_m + cfg.bleed_depth_per_m * z;
+            let beyond = z + cfg.bleed_depth_m + cfg.in_front_depth_per_m * z;
             let (u, v) = ((i as i64) % w, (i as i64) / w);
             let mut across = false;
             for y in (v - r).max(0)..=(v + r).min(h - 1) {
@@ -313,6 +315,27 @@ mod tests {
             "the grown pixels 3, 4, 12, 13 stay unsure"
         );
         assert!((5..12).all(|u| !row.contains(&u)), "{row:?}");
+    }
+
+    #[test]
+    fn a_thin_part_a_few_decimetres_before_the_surface_behind_leaves_the_band_with_the_in_front_allowance() {
+        // The object at 2.7 m, 0.3 m before the wall: in front by more than 0.1 + 0.03 × 2.7 m,
+        // not by the bleed trim's 0.1 + 0.1 × 2.7 m.
+        let mut rod = frame(5, 12);
+        for (i, z) in rod.depth_m.iter_mut().enumerate() {
+            *z = if (5..12).contains(&(i % 20)) { 2.7 } else { 3.0 };
+        }
+        let banded = |cfg: &ObjectConfig| -> Vec<usize> {
+            let mut band = border_band(&rod, 2).expect("the mask has borders");
+            spare_pixels_in_front(&rod, &mut band, 2, cfg);
+            (0..20).filter(|&u| band[u]).collect()
+        };
+        assert_eq!(banded(&ObjectConfig::default()), vec![3, 4, 12, 13]);
+        let bleed_allowance = ObjectConfig {
+            in_front_depth_per_m: 0.1,
+            ..ObjectConfig::default()
+        };
+        assert_eq!(banded(&bleed_allowance), vec![3, 4, 5, 6, 10, 11, 12, 13]);
     }
 
     #[test]
