@@ -284,14 +284,17 @@ mod tests {
         );
     }
 
+    /// The columns of `f`'s first row left in its 2 px band once the pixels in front are spared.
+    fn banded(f: &RgbdFrame, cfg: &ObjectConfig) -> Vec<usize> {
+        let mut band = border_band(f, 2).expect("the mask has borders");
+        spare_pixels_in_front(f, &mut band, 2, cfg);
+        (0..20).filter(|&u| band[u]).collect()
+    }
+
     #[test]
     fn mask_pixels_in_front_of_everything_across_their_border_leave_the_band() {
         let cfg = ObjectConfig::default();
-        let banded = |f: &RgbdFrame| -> Vec<usize> {
-            let mut band = border_band(f, 2).expect("the mask has borders");
-            spare_pixels_in_front(f, &mut band, 2, &cfg);
-            (0..20).filter(|&u| band[u]).collect()
-        };
+        let banded = |f: &RgbdFrame| banded(f, &cfg);
         // The object 1.5 m in front of the wall: its own pixels in the band are spared, the
         // wall's stay unsure (the mask may have shrunk there).
         assert_eq!(banded(&frame(5, 12)), vec![3, 4, 12, 13]);
@@ -305,10 +308,7 @@ mod tests {
         assert_eq!(banded(&against), vec![3, 4, 5, 6, 10, 11, 12, 13]);
         // A mask grown onto the wall: the grown pixels show the wall, near the wall's other
         // pixels, and stay unsure; the object's pixels in front of them are spared.
-        let grown = frame(3, 14);
-        let mut band = border_band(&grown, 2).expect("borders");
-        spare_pixels_in_front(&grown, &mut band, 2, &cfg);
-        let row: Vec<usize> = (0..20).filter(|&u| band[u]).collect();
+        let row = banded(&frame(3, 14));
         assert_eq!(
             row,
             vec![1, 2, 3, 4, 12, 13, 14, 15],
@@ -325,17 +325,12 @@ mod tests {
         for (i, z) in rod.depth_m.iter_mut().enumerate() {
             *z = if (5..12).contains(&(i % 20)) { 2.7 } else { 3.0 };
         }
-        let banded = |cfg: &ObjectConfig| -> Vec<usize> {
-            let mut band = border_band(&rod, 2).expect("the mask has borders");
-            spare_pixels_in_front(&rod, &mut band, 2, cfg);
-            (0..20).filter(|&u| band[u]).collect()
-        };
-        assert_eq!(banded(&ObjectConfig::default()), vec![3, 4, 12, 13]);
+        assert_eq!(banded(&rod, &ObjectConfig::default()), vec![3, 4, 12, 13]);
         let bleed_allowance = ObjectConfig {
             in_front_depth_per_m: 0.1,
             ..ObjectConfig::default()
         };
-        assert_eq!(banded(&bleed_allowance), vec![3, 4, 5, 6, 10, 11, 12, 13]);
+        assert_eq!(banded(&rod, &bleed_allowance), vec![3, 4, 5, 6, 10, 11, 12, 13]);
     }
 
     #[test]
