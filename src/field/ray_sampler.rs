@@ -13,6 +13,10 @@
 //!   `d + clip(N(0, (band/3)²), ±band)`;
 //! - if it shows another object or the background: `surface_samples` stratified in
 //!   `[d − band, d + behind]` — the ray stops just behind the occluder;
+//! - if its label is unsure ([`UnsurePixels::FreeBeforeReturn`]): the ray is sampled as if it
+//!   returned at d − a·d² (the view's depth noise allowance), its `surface_samples` stratified
+//!   in the band before that, `[d − a·d² − 2·band, d − a·d² − band]`: free space, whoever's
+//!   surface it met;
 //! - invalid depth: all samples stratified in `[0, max valid depth of the step's rays]`; for
 //!   another object's pixel with a depth within [`NO_RETURN_RADIUS_PX`] (a depth camera's hole
 //!   at a depth edge), in `[0, nearest of those depths − band]`: the surface beside the hole hid
@@ -35,7 +39,7 @@ use crate::objects::hidden_space::{CellRules, FREE_CLEARANCE_M, HiddenSpace, Hid
 use crate::objects::keyframes::KeyframeWindow;
 use crate::objects::object_view::{ObjectView, PixelState};
 
-pub use super::ray_sampler_config::RaySamplerConfig;
+pub use super::ray_sampler_config::{RaySamplerConfig, UnsurePixels};
 
 /// The keyframes of one step: `recent` always, then draws (with replacement) from the other
 /// views until `count` views are chosen. With no other view, the recent ones are drawn again.
@@ -211,9 +215,19 @@ fn sample_rays(
             0.0
         };
         let state = view.states[i];
-        if state == PixelState::Unsure {
-            continue;
-        }
+        // An unsure pixel's ray is sampled as if it returned at its depth less the noise
+        // allowance: all its samples then lie before the surface, whoever's it is.
+        let depth = match (state, cfg.unsure_pixels) {
+            (PixelState::Unsure, UnsurePixels::Skipped) => continue,
+            (PixelState::Unsure, UnsurePixels::FreeBeforeReturn) => {
+                let before = depth - view.depth_noise_m(depth);
+                if depth <= 0.0 || before <= cfg.surface_band_m {
+                    continue;
+                }
+                before
+            }
+            _ => depth,
+        };
         let (camera, dir) = pixel_ray(view, u, row);
         let (camera, dir) = match reflect {
             Some(plane) => (plane.reflect(&camera), plane.reflect_vector(&dir)),
@@ -329,12 +343,14 @@ fn depths_along_ray(
             }
             z[start..].sort_by(f32::total_cmp);
         }
+        // Another object's ray stopped short: its last samples lie in the band before the
+        // point it is free up to, not around its return.
+        PixelState::Unsure => {
+            stratified((free_end - band).max(0.0), free_end, cfg.surface_samples, rng, z);
+            z.sort_by(f32::total_cmp);
+        }
         // Views hold no prior rays; were one there, it would only teach free space.
-        PixelState::OtherObject
-        | PixelState::Unsure
-        | PixelState::HiddenSolid
-        | PixelState::BelowSupport
-        | PixelState::SeenFree => {
+        PixelState::OtherObject | PixelState::HiddenSolid | PixelState::BelowSupport | PixelState::SeenFree => {
             stratified(
                 (depth - band).max(0.0),
                 depth + cfg.behind_occluder_m,

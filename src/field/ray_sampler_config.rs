@@ -63,6 +63,26 @@ pub struct RaySamplerConfig {
     pub mirror_planes: MirrorPlanes,
     /// Weight of the priors' loss (mean over their samples of −ln o, or −ln(1 − o) under the box).
     pub hidden_solid_weight: f32,
+    /// What a ray of an unsure pixel (a segmenter's mask border, a bleeding or held-back mask)
+    /// teaches.
+    pub unsure_pixels: UnsurePixels,
+}
+
+/// What a ray of an [unsure](crate::objects::object_view::PixelState::Unsure) pixel teaches a
+/// field. Its label is not trusted, its depth is: whoever's surface the ray met at depth d, it
+/// passed through empty space before it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UnsurePixels {
+    /// Free space before the return: the ray is sampled as another object's would be were its
+    /// return at d − the view's depth noise allowance (`dataset.depth_noise_per_m2` × d²), but
+    /// stopped short of it — its surface samples in the band before d − allowance −
+    /// `surface_band_m`, where every sample ends — and its rendered opacity is asked to be 0. A
+    /// pixel without depth gives no ray.
+    #[default]
+    FreeBeforeReturn,
+    /// No ray: the pixel teaches nothing (before session 51).
+    Skipped,
 }
 
 impl RaySamplerConfig {
@@ -92,6 +112,7 @@ impl RaySamplerConfig {
         mirror_rays: None,
         mirror_planes: MirrorPlanes::BothWhenFound,
         hidden_solid_weight: 1.0,
+        unsure_pixels: UnsurePixels::FreeBeforeReturn,
     };
 
     /// vMAP's background sampler: 5 keyframes × 240 pixels (1 200 rays), 5 + 9 samples per ray.
@@ -113,6 +134,7 @@ impl RaySamplerConfig {
         mirror_rays: None,
         mirror_planes: MirrorPlanes::BothWhenFound,
         hidden_solid_weight: 1.0,
+        unsure_pixels: UnsurePixels::FreeBeforeReturn,
     };
 
     /// Samples per ray.

@@ -19,7 +19,8 @@ pub enum PixelState {
     /// The segmentation does not know (ScanNet's unlabelled pixels).
     Unknown,
     /// The segmentation's label is not trusted ([`InstanceLabel::Unsure`]): the pixel teaches
-    /// nothing.
+    /// only the free space before its return, whoever's surface that is
+    /// ([`crate::field::ray_sampler::UnsurePixels`]).
     Unsure,
     /// Not a pixel: a prior ray whose samples lie in cells of the object's box that no view saw
     /// into ([`super::hidden_space`]); each sample is asked to be solid.
@@ -40,12 +41,13 @@ impl PixelState {
     }
 
     /// The rendered opacity the loss asks of the ray, if it asks one: 1 on the object's pixels,
-    /// 0 on other objects' (free space up to them).
+    /// 0 on other objects' (free space up to them) and on unsure ones (whose samples all lie
+    /// before their return).
     pub fn opacity_target(self) -> Option<f32> {
         match self {
             Self::ThisObject => Some(1.0),
-            Self::OtherObject => Some(0.0),
-            Self::Unknown | Self::Unsure | Self::HiddenSolid | Self::BelowSupport | Self::SeenFree => None,
+            Self::OtherObject | Self::Unsure => Some(0.0),
+            Self::Unknown | Self::HiddenSolid | Self::BelowSupport | Self::SeenFree => None,
         }
     }
 
