@@ -375,3 +375,7 @@ use crate::rng::standard_normal_f32 as standard_normal;
 #[cfg(test)]
 #[path = "ray_sampler_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "ray_sampler_unsure_tests.rs"]
+mod unsure_tests;
