@@ -221,7 +221,8 @@ fn sample_rays(
             (PixelState::Unsure, UnsurePixels::Skipped) => continue,
             (PixelState::Unsure, UnsurePixels::FreeBeforeReturn) => {
                 let before = depth - view.depth_noise_m(depth);
-                if depth <= 0.0 || before <= cfg.surface_band_m {
+                // Also no depth (0): nothing before it to teach.
+                if before <= cfg.surface_band_m {
                     continue;
                 }
                 before
