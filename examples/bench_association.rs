@@ -1,7 +1,7 @@
 //! Association benchmark: per-frame masks of a synthetic scene seen through the Kinect-like
 //! sensor, associated into objects (no fields, no training) and checked against the exact render.
 //!
-//! `cargo run --release --features bench --example bench_association -- [--preset default|living|small] [--seeds 0,1,2,3] [--noise none|kinect] [--config 'TOML of objects.association']`
+//! `cargo run --release --features bench --example bench_association -- [--preset default|living|small] [--seeds 0,1,2,3] [--noise none|kinect|structured-light|time-of-flight|active-stereo] [--config 'TOML of objects.association']`
 //! prints, per scene, the objects made against the ground truth's, each object's purity (the
 //! share of its pixels that show its main ground-truth object; `catmap::metrics::association_purity`),
 //! ground-truth objects no object covers, and the association's milliseconds per frame.
@@ -31,7 +31,10 @@ fn main() -> Result<()> {
     let model = match flag("--noise").map_or("kinect", String::as_str) {
         "kinect" => SensorModel::Kinect,
         "none" => SensorModel::None,
-        other => bail!("--noise {other}: kinect or none"),
+        "structured-light" => SensorModel::StructuredLight,
+        "time-of-flight" => SensorModel::TimeOfFlight,
+        "active-stereo" => SensorModel::ActiveStereo,
+        other => bail!("--noise {other}: kinect, none, structured-light, time-of-flight or active-stereo"),
     };
     let seeds: Vec<u64> = flag("--seeds")
         .map_or("0,1,2,3", String::as_str)
@@ -48,10 +51,8 @@ fn main() -> Result<()> {
     for seed in seeds {
         let exact = SyntheticScene::generate(seed, preset)?;
         let truth_count = exact.objects().len();
-        let noisy = SyntheticScene::generate(seed, preset)?.with_sensor(SensorSettings {
-            model,
-            ids: InstanceIds::PerFrame,
-        });
+        let noisy =
+            SyntheticScene::generate(seed, preset)?.with_sensor(SensorSettings::new(model, InstanceIds::PerFrame));
         let mut tracker = InstanceTracker::default();
         let mut tally = AssociationTally::default();
         let mut seconds = 0.0;

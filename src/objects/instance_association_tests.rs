@@ -288,20 +288,14 @@ fn associate_small_scene(
 #[test]
 fn per_frame_ids_of_a_small_scene_give_its_six_objects_each_pure() {
     use crate::synth::{InstanceIds, SensorModel, SensorSettings};
-    let exact_masks = SensorSettings {
-        model: SensorModel::None,
-        ids: InstanceIds::PerFrame,
-    };
+    let exact_masks = SensorSettings::new(SensorModel::None, InstanceIds::PerFrame);
     let objects = associate_small_scene(4, exact_masks);
     assert_eq!(objects.len(), 6, "{objects:?}");
     assert!(objects.iter().all(|o| o.purity == 1.0), "{objects:?}");
     let truths: BTreeSet<ObjectId> = objects.iter().map(|o| o.truth).collect();
     assert_eq!(truths.len(), 6, "one object per ground-truth object: {objects:?}");
 
-    let kinect = SensorSettings {
-        model: SensorModel::Kinect,
-        ids: InstanceIds::PerFrame,
-    };
+    let kinect = SensorSettings::new(SensorModel::Kinect, InstanceIds::PerFrame);
     let objects = associate_small_scene(4, kinect);
     assert!((5..=7).contains(&objects.len()), "the truth's six, ± 1: {objects:?}");
     assert!(objects.iter().all(|o| o.purity >= 0.95), "{objects:?}");

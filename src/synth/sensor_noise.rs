@@ -1,29 +1,30 @@
 //! What a real depth camera and a 2D segmenter do to a frame, applied to a synthetic one
-//! (`catmap synth --noise kinect --ids per-frame`).
+//! (`catmap synth --noise FAMILY --ids per-frame`).
 //!
-//! [`SensorModel::Kinect`] ([`KinectNoise`], every value documented there), in this order:
-//! 1. **Holes at depth edges**: a pixel whose depth differs from a 4-neighbour's by more than
-//!    `edge_jump_m` loses its depth with probability `edge_hole_probability`.
-//! 2. **Depth noise growing with distance**: z + N(0, σ(z)²) with σ(z) = a + b·(z − z₀)², the
-//!    axial model measured for the Kinect v1 (Nguyen, Izadi and Lovell, 3DIMPVT 2012); beyond
-//!    `max_range_m` no depth; `dropout_probability` of the other pixels lose theirs at random.
-//! 3. **Mask boundary jitter**: each object's mask grows (into pixels of no object) or shrinks
-//!    (its border pixels become unlabelled) by a whole number of pixels drawn in
-//!    `−mask_jitter_px..=mask_jitter_px`, per object and frame.
-//! 4. **Missed masks**: with probability `mask_miss_probability` an object is not segmented in a
-//!    frame (its pixels unlabelled; the depth stays).
-//! 5. **Class confusion**: with probability `class_confusion_probability` an object's mask carries
-//!    another of the scene's object classes in a frame.
-//!
-//! [`SensorModel::KinectDepth`] applies steps 1 and 2 only, [`SensorModel::SegmenterMasks`]
-//! steps 3–5 only (to tell what each part costs; their draws differ from the whole model's).
+//! A scene's [`SensorSettings`] name a depth camera ([`DepthNoise`]), a segmenter
+//! ([`MaskNoise`]) and how instance ids relate across frames ([`InstanceIds`]). The depth cameras
+//! are independent families with parameters from the literature, each in its own file:
+//! - [`DepthNoise::Kinect`] and [`MaskNoise::Kinect`]: catmap's own Kinect-like model
+//!   ([`kinect`]), the one the mapper's settings were first tuned on;
+//! - [`DepthNoise::StructuredLight`] ([`structured_light`]): Kinect v1 / Structure sensor —
+//!   disparity quantised to 1/8 px, Nguyen et al.'s axial σ(z), the projector's shadows, holes at
+//!   depth edges, in speckles and at grazing angles, 4.5 m range;
+//! - [`DepthNoise::TimeOfFlight`] ([`time_of_flight`]): Kinect v2 / Azure Kinect — Fankhauser et
+//!   al.'s σ(z, θ), flying pixels at depth edges, multipath in concave corners;
+//! - [`DepthNoise::ActiveStereo`] ([`active_stereo`]): RealSense D4xx — σ ∝ z² from the
+//!   disparity's sub-pixel error, edges fattened by the matching window, the second imager's
+//!   occlusions, holes on dark surfaces and where the projected pattern fades;
+//! - [`MaskNoise::Segmenter`] ([`segmenter`]): a 2D instance segmenter — borders off by up to
+//!   2 px along their length, small objects missed more often, a large object split into two
+//!   masks, two touching objects merged into one, spurious one-frame masks, similar classes
+//!   confused.
 //!
 //! [`InstanceIds::PerFrame`] then gives every frame its own instance ids: the objects of a frame
 //! get distinct ids drawn from 1–99 anew, as a per-frame segmenter numbers its masks.
 //!
 //! Unlabelled pixels have instance 0 and class 0. Every draw of frame `i` comes from one generator
-//! of the scene's seed and stream [`RngStream::SensorFrame`]`(i)`, so a frame reads the same
-//! whichever order frames are read in.
+//! of the scene's seed and stream [`RngStream::SensorFrame`]`(i)`, the depth's draws first, so a
+//! frame reads the same whichever order frames are read in.
 
 use std::collections::BTreeMap;
 
@@ -33,32 +34,106 @@ use serde::{Deserialize, Serialize};
 use super::render::RenderedFrame;
 use crate::dataset::classes::is_replica_background;
 use crate::ids::ClassId;
-use crate::rng::{RngStream, seeded_rng, standard_normal_f32};
+use crate::rng::{RngStream, seeded_rng};
 
-/// How imperfect the synthetic camera and segmenter are.
+pub mod active_stereo;
+pub mod depth_image;
+pub mod kinect;
+pub mod segmenter;
+pub mod structured_light;
+pub mod time_of_flight;
+
+pub use kinect::KinectNoise;
+
+/// A depth camera family.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DepthNoise {
+    /// The rendered depth.
+    #[default]
+    Exact,
+    /// catmap's own Kinect-like depth ([`KinectNoise`]).
+    Kinect,
+    /// A structured-light camera ([`structured_light::StructuredLight`]).
+    StructuredLight,
+    /// A time-of-flight camera ([`time_of_flight::TimeOfFlight`]).
+    TimeOfFlight,
+    /// An active stereo camera ([`active_stereo::ActiveStereo`]).
+    ActiveStereo,
+}
+
+impl DepthNoise {
+    /// The family's axial noise at depth `z_m` on a surface facing the camera (its true σ(z)),
+    /// metres; 0 for exact depth.
+    pub fn sigma_m(self, z_m: f32) -> f32 {
+        match self {
+            Self::Exact => 0.0,
+            Self::Kinect => KinectNoise::default().sigma_m(z_m),
+            Self::StructuredLight => structured_light::StructuredLight::default().sigma_m(z_m),
+            Self::TimeOfFlight => time_of_flight::TimeOfFlight::default().sigma_m(z_m, 0.0),
+            Self::ActiveStereo => active_stereo::ActiveStereo::default().sigma_m(z_m),
+        }
+    }
+
+    /// Farthest depth the family returns, metres (`f32::INFINITY` for exact depth).
+    pub fn max_range_m(self) -> f32 {
+        match self {
+            Self::Exact => f32::INFINITY,
+            Self::Kinect => KinectNoise::default().max_range_m,
+            Self::StructuredLight => structured_light::StructuredLight::default().max_range_m,
+            Self::TimeOfFlight => time_of_flight::TimeOfFlight::default().max_range_m,
+            Self::ActiveStereo => active_stereo::ActiveStereo::default().max_range_m,
+        }
+    }
+}
+
+/// A segmenter family.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MaskNoise {
+    /// The rendered masks.
+    #[default]
+    Exact,
+    /// catmap's own segmenter model: masks grown or shrunk whole, missed, mislabelled
+    /// ([`KinectNoise`]).
+    Kinect,
+    /// A 2D instance segmenter ([`segmenter::SegmenterNoise`]).
+    Segmenter,
+}
+
+/// `catmap synth --noise`: a depth camera and a segmenter together.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SensorModel {
     /// Exact depth and exact masks (the default).
     #[default]
     None,
-    /// Kinect-like depth and a segmenter's masks ([`KinectNoise::default`]).
+    /// catmap's own Kinect-like depth and segmenter.
     Kinect,
-    /// The depth of [`SensorModel::Kinect`] (steps 1 and 2) with exact masks.
+    /// The depth of [`SensorModel::Kinect`] with exact masks.
     KinectDepth,
-    /// The masks of [`SensorModel::Kinect`] (steps 3–5) with exact depth.
+    /// The masks of [`SensorModel::Kinect`] with exact depth.
     SegmenterMasks,
+    /// A structured-light camera and a 2D instance segmenter.
+    StructuredLight,
+    /// A time-of-flight camera and a 2D instance segmenter.
+    TimeOfFlight,
+    /// An active stereo camera and a 2D instance segmenter.
+    ActiveStereo,
 }
 
 impl SensorModel {
-    /// Whether the depth is degraded (steps 1 and 2).
-    pub fn degrades_depth(self) -> bool {
-        matches!(self, Self::Kinect | Self::KinectDepth)
-    }
-
-    /// Whether the masks are degraded (steps 3–5).
-    pub fn degrades_masks(self) -> bool {
-        matches!(self, Self::Kinect | Self::SegmenterMasks)
+    /// Its depth camera and segmenter.
+    pub fn parts(self) -> (DepthNoise, MaskNoise) {
+        match self {
+            Self::None => (DepthNoise::Exact, MaskNoise::Exact),
+            Self::Kinect => (DepthNoise::Kinect, MaskNoise::Kinect),
+            Self::KinectDepth => (DepthNoise::Kinect, MaskNoise::Exact),
+            Self::SegmenterMasks => (DepthNoise::Exact, MaskNoise::Kinect),
+            Self::StructuredLight => (DepthNoise::StructuredLight, MaskNoise::Segmenter),
+            Self::TimeOfFlight => (DepthNoise::TimeOfFlight, MaskNoise::Segmenter),
+            Self::ActiveStereo => (DepthNoise::ActiveStereo, MaskNoise::Segmenter),
+        }
     }
 }
 
@@ -75,67 +150,53 @@ pub enum InstanceIds {
 
 /// The imperfections of a synthetic scene's frames.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(from = "SensorRecord")]
 pub struct SensorSettings {
-    /// Depth and mask imperfections.
-    pub model: SensorModel,
+    /// The depth camera.
+    pub depth: DepthNoise,
+    /// The segmenter.
+    pub masks: MaskNoise,
     /// Instance ids across frames.
     pub ids: InstanceIds,
 }
 
-/// The Kinect-like model's parameters.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct KinectNoise {
-    /// σ(z) = `sigma_base_m` + `sigma_quadratic_per_m` · (z − `sigma_offset_m`)², metres
-    /// (0.0012, 0.0019, 0.4: 1.5 mm at 0.8 m, 6.6 mm at 2 m, 18 mm at 3.5 m).
-    pub sigma_base_m: f32,
-    /// See `sigma_base_m`.
-    pub sigma_quadratic_per_m: f32,
-    /// See `sigma_base_m`.
-    pub sigma_offset_m: f32,
-    /// No depth beyond this, metres (5.0).
-    pub max_range_m: f32,
-    /// A depth step larger than this to a 4-neighbour makes a pixel an edge pixel, metres (0.04).
-    pub edge_jump_m: f32,
-    /// Chance an edge pixel loses its depth (0.6).
-    pub edge_hole_probability: f32,
-    /// Chance any other pixel loses its depth (0.005).
-    pub dropout_probability: f32,
-    /// Largest growth or shrinkage of a mask, pixels (2).
-    pub mask_jitter_px: u32,
-    /// Chance an object is not segmented in a frame (0.05).
-    pub mask_miss_probability: f32,
-    /// Chance an object's mask carries another class in a frame (0.02).
-    pub class_confusion_probability: f32,
+/// `scene.json`'s `sensor` as written now (`depth`, `masks`, `ids`) or before the families
+/// (`model`, `ids`).
+#[derive(Deserialize)]
+struct SensorRecord {
+    #[serde(default)]
+    model: Option<SensorModel>,
+    #[serde(default)]
+    depth: DepthNoise,
+    #[serde(default)]
+    masks: MaskNoise,
+    #[serde(default)]
+    ids: InstanceIds,
 }
 
-impl Default for KinectNoise {
-    fn default() -> Self {
-        Self {
-            sigma_base_m: 0.0012,
-            sigma_quadratic_per_m: 0.0019,
-            sigma_offset_m: 0.4,
-            max_range_m: 5.0,
-            edge_jump_m: 0.04,
-            edge_hole_probability: 0.6,
-            dropout_probability: 0.005,
-            mask_jitter_px: 2,
-            mask_miss_probability: 0.05,
-            class_confusion_probability: 0.02,
+impl From<SensorRecord> for SensorSettings {
+    fn from(r: SensorRecord) -> Self {
+        match r.model {
+            Some(model) => Self::new(model, r.ids),
+            None => Self {
+                depth: r.depth,
+                masks: r.masks,
+                ids: r.ids,
+            },
         }
     }
 }
 
-impl KinectNoise {
-    /// Axial depth noise at depth `z_m`, metres.
-    pub fn sigma_m(&self, z_m: f32) -> f32 {
-        self.sigma_base_m + self.sigma_quadratic_per_m * (z_m - self.sigma_offset_m).powi(2)
-    }
-}
-
 impl SensorSettings {
+    /// The depth camera and segmenter of `model`, with `ids`.
+    pub fn new(model: SensorModel, ids: InstanceIds) -> Self {
+        let (depth, masks) = model.parts();
+        Self { depth, masks, ids }
+    }
+
     /// True when frames stay as rendered.
     pub fn is_exact(&self) -> bool {
-        self.model == SensorModel::None && self.ids == InstanceIds::Consistent
+        self.depth == DepthNoise::Exact && self.masks == MaskNoise::Exact && self.ids == InstanceIds::Consistent
     }
 
     /// Frame `position` of a scene seeded with `seed` as the sensor and segmenter would give it;
@@ -145,12 +206,18 @@ impl SensorSettings {
             return;
         }
         let mut rng = seeded_rng(seed, RngStream::SensorFrame(position as u64));
-        let noise = KinectNoise::default();
-        if self.model.degrades_depth() {
-            degrade_depth(frame, &noise, &mut rng);
+        let kinect = KinectNoise::default();
+        match self.depth {
+            DepthNoise::Exact => {}
+            DepthNoise::Kinect => kinect::degrade_depth(frame, &kinect, &mut rng),
+            DepthNoise::StructuredLight => structured_light::StructuredLight::default().degrade(frame, &mut rng),
+            DepthNoise::TimeOfFlight => time_of_flight::TimeOfFlight::default().degrade(frame, &mut rng),
+            DepthNoise::ActiveStereo => active_stereo::ActiveStereo::default().degrade(frame, &mut rng),
         }
-        if self.model.degrades_masks() {
-            degrade_masks(frame, &noise, classes, &mut rng);
+        match self.masks {
+            MaskNoise::Exact => {}
+            MaskNoise::Kinect => kinect::degrade_masks(frame, &kinect, classes, &mut rng),
+            MaskNoise::Segmenter => segmenter::SegmenterNoise::default().degrade(frame, position, classes, &mut rng),
         }
         if self.ids == InstanceIds::PerFrame {
             renumber_instances(frame, &mut rng);
@@ -159,103 +226,8 @@ impl SensorSettings {
 }
 
 /// True when pixel `i` belongs to an object (not nothing, floor or wall).
-fn is_object(frame: &RenderedFrame, i: usize) -> bool {
+pub(crate) fn is_object(frame: &RenderedFrame, i: usize) -> bool {
     frame.instance_ids[i] != 0 && !is_replica_background(frame.classes[i])
-}
-
-/// Steps 1 and 2 of the module doc.
-fn degrade_depth(frame: &mut RenderedFrame, noise: &KinectNoise, rng: &mut impl rand::Rng) {
-    let (w, h) = (frame.intrinsics.width as usize, frame.intrinsics.height as usize);
-    let clean = frame.depth_m.clone();
-    let jump = |a: f32, b: f32| a > 0.0 && b > 0.0 && (a - b).abs() > noise.edge_jump_m;
-    for (i, depth) in frame.depth_m.iter_mut().enumerate() {
-        let z = clean[i];
-        if z <= 0.0 {
-            continue;
-        }
-        let (u, v) = (i % w, i / w);
-        let edge = (u > 0 && jump(z, clean[i - 1]))
-            || (u + 1 < w && jump(z, clean[i + 1]))
-            || (v > 0 && jump(z, clean[i - w]))
-            || (v + 1 < h && jump(z, clean[i + w]));
-        let hole = if edge {
-            noise.edge_hole_probability
-        } else {
-            noise.dropout_probability
-        };
-        let noisy = z + noise.sigma_m(z) * standard_normal_f32(rng);
-        *depth = if rng.random::<f32>() < hole || z > noise.max_range_m || noisy <= 0.0 {
-            0.0
-        } else {
-            noisy
-        };
-    }
-}
-
-/// Steps 3–5 of the module doc, objects in id order.
-fn degrade_masks(frame: &mut RenderedFrame, noise: &KinectNoise, classes: &[ClassId], rng: &mut impl rand::Rng) {
-    let (w, h) = (frame.intrinsics.width as i64, frame.intrinsics.height as i64);
-    let mut pixels: BTreeMap<u16, Vec<usize>> = BTreeMap::new();
-    for i in 0..frame.instance_ids.len() {
-        if is_object(frame, i) {
-            pixels.entry(frame.instance_ids[i]).or_default().push(i);
-        }
-    }
-    let original_ids = frame.instance_ids.clone();
-    let original_object: Vec<bool> = (0..original_ids.len()).map(|i| is_object(frame, i)).collect();
-    let reach = i64::from(noise.mask_jitter_px);
-    for (&id, own) in &pixels {
-        let jitter = rng.random_range(-reach..=reach);
-        let missed = rng.random::<f32>() < noise.mask_miss_probability;
-        let confused = rng.random::<f32>() < noise.class_confusion_probability;
-        let class = frame.classes[own[0]];
-        let others: Vec<ClassId> = classes.iter().copied().filter(|&c| c != class).collect();
-        let said = if confused && !others.is_empty() {
-            others[rng.random_range(0..others.len())]
-        } else {
-            class
-        };
-        let near = |i: usize, r: i64, hit: &dyn Fn(usize) -> bool| {
-            let (u, v) = ((i as i64) % w, (i as i64) / w);
-            (-r..=r).any(|dv| {
-                (-r..=r).any(|du| {
-                    let (x, y) = (u + du, v + dv);
-                    x >= 0 && y >= 0 && x < w && y < h && hit((y * w + x) as usize)
-                })
-            })
-        };
-        let mut members: Vec<usize> = if jitter < 0 {
-            let outside = |j: usize| original_ids[j] != id || !original_object[j];
-            own.iter().copied().filter(|&i| !near(i, -jitter, &outside)).collect()
-        } else {
-            own.clone()
-        };
-        if jitter > 0 {
-            let mut grown: Vec<usize> = own
-                .iter()
-                .flat_map(|&i| {
-                    let (u, v) = ((i as i64) % w, (i as i64) / w);
-                    (-jitter..=jitter).flat_map(move |dv| (-jitter..=jitter).map(move |du| (u + du, v + dv)))
-                })
-                .filter(|&(x, y)| x >= 0 && y >= 0 && x < w && y < h)
-                .map(|(x, y)| (y * w + x) as usize)
-                .filter(|&j| !original_object[j] && !is_object(frame, j))
-                .collect();
-            grown.sort_unstable();
-            grown.dedup();
-            members.extend(grown);
-        }
-        for &i in own {
-            frame.instance_ids[i] = 0;
-            frame.classes[i] = ClassId(0);
-        }
-        if !missed {
-            for &i in &members {
-                frame.instance_ids[i] = id;
-                frame.classes[i] = said;
-            }
-        }
-    }
 }
 
 /// Gives the frame's objects distinct ids drawn from 1–99 (a partial shuffle).
@@ -281,3 +253,7 @@ fn renumber_instances(frame: &mut RenderedFrame, rng: &mut impl rand::Rng) {
 #[cfg(test)]
 #[path = "sensor_noise_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "sensor_noise_family_tests.rs"]
+mod family_tests;

@@ -41,10 +41,7 @@ fn frame(wall_m: f32, object_m: f32) -> RenderedFrame {
 }
 
 fn kinect() -> SensorSettings {
-    SensorSettings {
-        model: SensorModel::Kinect,
-        ids: InstanceIds::Consistent,
-    }
+    SensorSettings::new(SensorModel::Kinect, InstanceIds::Consistent)
 }
 
 const CLASSES: [ClassId; 3] = [replica::CHAIR, replica::STOOL, replica::TABLE];
@@ -60,10 +57,7 @@ fn the_depth_part_keeps_the_masks_and_the_masks_part_keeps_the_depth() {
     let clean = frame(3.0, 1.5);
     let with = |model: SensorModel| {
         let mut f = frame(3.0, 1.5);
-        let settings = SensorSettings {
-            model,
-            ids: InstanceIds::Consistent,
-        };
+        let settings = SensorSettings::new(model, InstanceIds::Consistent);
         settings.apply(&mut f, 1, 4, &CLASSES);
         f
     };
@@ -191,10 +185,7 @@ fn a_confused_mask_carries_another_scene_class() {
 
 #[test]
 fn per_frame_ids_renumber_each_frame_but_keep_its_partition() {
-    let settings = SensorSettings {
-        model: SensorModel::None,
-        ids: InstanceIds::PerFrame,
-    };
+    let settings = SensorSettings::new(SensorModel::None, InstanceIds::PerFrame);
     let clean = frame(3.0, 1.5);
     let mut ids_seen = BTreeSet::new();
     for position in 0..6 {

@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
+use catmap::synth::sensor_noise::{DepthNoise, MaskNoise};
 use catmap::synth::{
     InstanceIds, Preset, SensorModel, SensorSettings, SyntheticScene, write_replica_layout, write_tum_layout,
 };
@@ -25,10 +26,16 @@ pub struct SynthArgs {
     /// Scene size.
     #[arg(long, value_enum, default_value_t = PresetArg::Default)]
     pub preset: PresetArg,
-    /// Depth camera and segmenter: exact, or Kinect-like depth noise with holes at depth edges
-    /// and a segmenter's jittered, sometimes missed or mislabelled masks (or one of the two).
+    /// Depth camera and segmenter: exact; catmap's own Kinect-like model (or one of its two
+    /// parts); or a camera family from the literature with a 2D instance segmenter's masks.
     #[arg(long, value_enum, default_value_t = NoiseArg::None)]
     pub noise: NoiseArg,
+    /// The depth camera alone, in place of `--noise`'s.
+    #[arg(long, value_enum)]
+    pub depth_noise: Option<DepthNoiseArg>,
+    /// The segmenter alone, in place of `--noise`'s.
+    #[arg(long, value_enum)]
+    pub mask_noise: Option<MaskNoiseArg>,
     /// Instance ids: one per object over the sequence, or every frame its own.
     #[arg(long, value_enum, default_value_t = IdsArg::Consistent)]
     pub ids: IdsArg,
@@ -55,6 +62,38 @@ pub enum NoiseArg {
     KinectDepth,
     /// A 2D segmenter's masks, exact depth.
     SegmenterMasks,
+    /// A structured-light camera (Kinect v1, Structure sensor) and a 2D instance segmenter.
+    StructuredLight,
+    /// A time-of-flight camera (Kinect v2, Azure Kinect) and a 2D instance segmenter.
+    TimeOfFlight,
+    /// An active stereo camera (RealSense D4xx) and a 2D instance segmenter.
+    ActiveStereo,
+}
+
+/// `--depth-noise` values.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DepthNoiseArg {
+    /// The rendered depth.
+    Exact,
+    /// catmap's own Kinect-like depth.
+    Kinect,
+    /// A structured-light camera.
+    StructuredLight,
+    /// A time-of-flight camera.
+    TimeOfFlight,
+    /// An active stereo camera.
+    ActiveStereo,
+}
+
+/// `--mask-noise` values.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MaskNoiseArg {
+    /// The rendered masks.
+    Exact,
+    /// catmap's own segmenter model.
+    Kinect,
+    /// A 2D instance segmenter.
+    Segmenter,
 }
 
 /// `--ids` values.
@@ -69,18 +108,37 @@ pub enum IdsArg {
 impl SynthArgs {
     /// The sensor the arguments ask for.
     pub fn sensor(&self) -> SensorSettings {
-        SensorSettings {
-            model: match self.noise {
-                NoiseArg::None => SensorModel::None,
-                NoiseArg::Kinect => SensorModel::Kinect,
-                NoiseArg::KinectDepth => SensorModel::KinectDepth,
-                NoiseArg::SegmenterMasks => SensorModel::SegmenterMasks,
-            },
-            ids: match self.ids {
-                IdsArg::Consistent => InstanceIds::Consistent,
-                IdsArg::PerFrame => InstanceIds::PerFrame,
-            },
+        let model = match self.noise {
+            NoiseArg::None => SensorModel::None,
+            NoiseArg::Kinect => SensorModel::Kinect,
+            NoiseArg::KinectDepth => SensorModel::KinectDepth,
+            NoiseArg::SegmenterMasks => SensorModel::SegmenterMasks,
+            NoiseArg::StructuredLight => SensorModel::StructuredLight,
+            NoiseArg::TimeOfFlight => SensorModel::TimeOfFlight,
+            NoiseArg::ActiveStereo => SensorModel::ActiveStereo,
+        };
+        let ids = match self.ids {
+            IdsArg::Consistent => InstanceIds::Consistent,
+            IdsArg::PerFrame => InstanceIds::PerFrame,
+        };
+        let mut sensor = SensorSettings::new(model, ids);
+        if let Some(depth) = self.depth_noise {
+            sensor.depth = match depth {
+                DepthNoiseArg::Exact => DepthNoise::Exact,
+                DepthNoiseArg::Kinect => DepthNoise::Kinect,
+                DepthNoiseArg::StructuredLight => DepthNoise::StructuredLight,
+                DepthNoiseArg::TimeOfFlight => DepthNoise::TimeOfFlight,
+                DepthNoiseArg::ActiveStereo => DepthNoise::ActiveStereo,
+            };
         }
+        if let Some(masks) = self.mask_noise {
+            sensor.masks = match masks {
+                MaskNoiseArg::Exact => MaskNoise::Exact,
+                MaskNoiseArg::Kinect => MaskNoise::Kinect,
+                MaskNoiseArg::Segmenter => MaskNoise::Segmenter,
+            };
+        }
+        sensor
     }
 }
 

@@ -179,10 +179,7 @@ fn a_damaged_checkpoint_is_refused_with_the_file_named() {
 fn a_run_with_per_frame_ids_and_border_votes_restored_mid_stream_continues_to_the_same_map() {
     let scene = SyntheticScene::generate(4, Preset::Small)
         .expect("small scene")
-        .with_sensor(SensorSettings {
-            model: SensorModel::None,
-            ids: InstanceIds::PerFrame,
-        });
+        .with_sensor(SensorSettings::new(SensorModel::None, InstanceIds::PerFrame));
     let mut config = config();
     config.objects.association.instances = InstanceSource::PerFrame;
     // A 1 px band whose pixels the last 4 frames decide (the 2 px band of `--masks segmenter`

@@ -25,10 +25,8 @@ fn rms(a: &[f32], b: &[f32]) -> f32 {
 fn a_depth_cameras_frames_come_closer_to_the_exact_depth_and_the_rest_passes_through() {
     let exact = SyntheticScene::generate(2, Preset::Small).expect("the small preset fits its room");
     let scene = SyntheticScene::generate(2, Preset::Small).expect("the small preset fits its room");
-    let noisy: Arc<dyn FrameSource> = Arc::new(scene.with_sensor(SensorSettings {
-        model: SensorModel::Kinect,
-        ids: InstanceIds::Consistent,
-    }));
+    let noisy: Arc<dyn FrameSource> =
+        Arc::new(scene.with_sensor(SensorSettings::new(SensorModel::Kinect, InstanceIds::Consistent)));
     let smoothed = with_depth_smoothing(noisy.clone(), DepthSmoothing::Bilateral, &BilateralDepth::default());
     assert_eq!(
         (smoothed.len(), smoothed.intrinsics()),
