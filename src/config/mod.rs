@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 mod phases;
 mod rerun;
+pub mod sensor_profile;
 
 pub use crate::checkpoint::CheckpointConfig;
 pub use crate::dataset::config::{DatasetConfig, LiveConfig, StreamConfig};

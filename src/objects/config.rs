@@ -103,7 +103,8 @@ pub struct ObjectConfig {
 pub const CAMERA_BOX_SMOOTHING_M: f32 = 0.08;
 
 /// What the masks' borders are like (`catmap run --masks`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum MaskBorders {
     /// Exact, as rendered or annotated (Replica, ScanNet, the synthetic scenes).
     Exact,

@@ -24,7 +24,8 @@ pub enum DepthSmoothing {
 }
 
 /// What the depth images are like (`catmap run --depth`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum DepthImages {
     /// Exact, as rendered (Replica, the synthetic scenes without noise).
     Exact,

@@ -5,4 +5,5 @@ pub mod depth_noise;
 pub mod depth_smoothing;
 pub mod frame;
 pub mod image_ops;
+pub mod mask_borders;
 pub mod pixel_box;

@@ -85,6 +85,11 @@ pub struct RunSummary {
     /// seconds from the stream's end to the final meshes.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub live: Option<LiveSummary>,
+    /// The depth and mask settings the run took (`--depth`, `--masks`, else the probe of the
+    /// dataset's frames) and what the probe found: σ(d) and range of the depth, how far the masks'
+    /// borders sit from their silhouettes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensor: Option<catmap::config::sensor_profile::SensorChoice>,
     /// The whole configuration the run used (defaults, config file and command line resolved),
     /// the same tree as `catmap config` prints.
     pub config: Option<catmap::MapperConfig>,
@@ -184,6 +189,7 @@ impl RunSummary {
             training: None,
             finishing_steps: BTreeMap::new(),
             live: None,
+            sensor: None,
             config: None,
         }
     }

@@ -6,6 +6,10 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 
+use catmap::config::sensor_profile::{SensorChoice, SensorProfile};
+use catmap::objects::config::MaskBorders;
+use catmap::sensor::depth_smoothing::DepthImages;
+
 use crate::cli::run_plan::{DatasetFormat, MapMode, Recording, RunPlan};
 use crate::cli::synth::{PresetArg, write_scene};
 
@@ -197,7 +201,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         Recording::Save(path) => Recording::Save(absolute(&path)?),
         connect => connect,
     };
-    let plan = RunPlan {
+    let mut plan = RunPlan {
         dataset: absolute(&dataset)?,
         format: args.format,
         camera: args.camera.clone(),
@@ -205,21 +209,28 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         mode: args.mode,
         recording,
         seconds_before: 0.0,
+        sensor: None,
     };
     // A dataset is opened before anything is written, so that a run that cannot start leaves
     // nothing behind.
-    let source = match &args.dataset {
-        Some(_) => plan.open_source(&config)?,
-        None => {
-            write_scene(
-                config.seed,
-                args.preset.into(),
-                catmap::synth::SensorSettings::default(),
-                &plan.dataset,
-            )?;
-            plan.open_source(&config)?
-        }
-    };
+    if args.dataset.is_none() {
+        write_scene(
+            config.seed,
+            args.preset.into(),
+            catmap::synth::SensorSettings::default(),
+            &plan.dataset,
+        )?;
+    }
+    let raw = plan.open_raw_source(&config)?;
+    let choice = sensor_choice(args, raw.as_ref());
+    let config = choice.apply(config);
+    plan.sensor = Some(choice);
+    let dataset_config = &config.dataset;
+    let source = catmap::dataset::smoothed_depth::with_depth_smoothing(
+        raw,
+        dataset_config.depth_smoothing,
+        &dataset_config.bilateral,
+    );
     std::fs::create_dir_all(&plan.out).with_context(|| format!("cannot create {}", plan.out.display()))?;
     crate::cli::run_phases::drive(
         crate::cli::run_phases::Start::Fresh(Box::new(config)),
@@ -227,6 +238,34 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         Arc::clone(&source),
         started,
     )
+}
+
+/// The depth and mask settings: `--depth` and `--masks` where given, else what a probe of the
+/// dataset's frames finds (logged).
+fn sensor_choice(args: &RunArgs, source: &dyn catmap::dataset::FrameSource) -> SensorChoice {
+    let depth = args.depth.map(|d| match d {
+        DepthArg::Exact => DepthImages::Exact,
+        DepthArg::Camera => DepthImages::Camera,
+    });
+    let masks = args.masks.map(|m| match m {
+        MasksArg::Exact => MaskBorders::Exact,
+        MasksArg::Segmenter => MaskBorders::Segmenter,
+    });
+    let profile = (depth.is_none() || masks.is_none()).then(|| SensorProfile::probe(source));
+    if let Some(profile) = &profile {
+        let noise = profile.depth_noise;
+        tracing::info!(
+            frames = profile.frames,
+            sigma_at_2m_mm = noise.map(|n| n.sigma_m(2.0) * 1000.0),
+            range_m = noise.map(|n| n.range_m),
+            valid_depth = profile.valid_depth_share,
+            mask_borders_off = profile.mask_borders.map(|m| m.off_share),
+            "sensor probed"
+        );
+    }
+    let choice = SensorChoice::resolve(depth, masks, profile);
+    tracing::info!(depth = ?choice.depth, by = ?choice.depth_chosen_by, masks = ?choice.masks, masks_by = ?choice.masks_chosen_by, "sensor settings");
+    choice
 }
 
 /// The configuration: the config file (or the defaults) with the command line's overrides.
@@ -247,18 +286,6 @@ fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
             InstancesArg::Consistent => catmap::objects::instance_association::InstanceSource::Consistent,
             InstancesArg::PerFrame => catmap::objects::instance_association::InstanceSource::PerFrame,
         };
-    }
-    if let Some(masks) = args.masks {
-        config.objects = config.objects.clone().with_mask_borders(match masks {
-            MasksArg::Exact => catmap::objects::config::MaskBorders::Exact,
-            MasksArg::Segmenter => catmap::objects::config::MaskBorders::Segmenter,
-        });
-    }
-    if let Some(depth) = args.depth {
-        config = config.with_depth_images(match depth {
-            DepthArg::Exact => catmap::sensor::depth_smoothing::DepthImages::Exact,
-            DepthArg::Camera => catmap::sensor::depth_smoothing::DepthImages::Camera,
-        });
     }
     if let Some(fps) = args.fps {
         config.stream.live.fps = Some(fps);

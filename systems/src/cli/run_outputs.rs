@@ -57,6 +57,7 @@ pub fn write_outputs(
     summary.command_line = std::env::args().collect();
     summary.seed = config.seed;
     summary.config = Some(config.clone());
+    summary.sensor = plan.sensor.clone();
     summary.training_steps = training_steps;
     summary.training = Some(training);
     summary.live = live;

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use anyhow::Context as _;
 use catmap::config::RerunConfig;
+use catmap::config::sensor_profile::SensorChoice;
 use catmap::dataset::FrameSource;
 use catmap::dataset::camera_spec::parse_camera_spec;
 use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
@@ -79,6 +80,9 @@ pub struct RunPlan {
     pub recording: Recording,
     /// Wall-clock seconds spent by earlier (interrupted) processes of this run.
     pub seconds_before: f64,
+    /// The depth and mask settings the run took, and what the probe of the dataset found.
+    #[serde(default)]
+    pub sensor: Option<SensorChoice>,
 }
 
 impl RunPlan {
@@ -87,8 +91,18 @@ impl RunPlan {
         self.out.join("checkpoint")
     }
 
-    /// Opens the dataset as a frame source.
+    /// Opens the dataset as a frame source, its depth smoothed as `config` says.
     pub fn open_source(&self, config: &catmap::MapperConfig) -> anyhow::Result<Arc<dyn FrameSource>> {
+        let dataset = &config.dataset;
+        Ok(with_depth_smoothing(
+            self.open_raw_source(config)?,
+            dataset.depth_smoothing,
+            &dataset.bilateral,
+        ))
+    }
+
+    /// Opens the dataset as a frame source, its images as read.
+    pub fn open_raw_source(&self, config: &catmap::MapperConfig) -> anyhow::Result<Arc<dyn FrameSource>> {
         let camera = self
             .camera
             .as_deref()
@@ -127,12 +141,7 @@ impl RunPlan {
                 Arc::new(TumSequence::open(dir, &options)?)
             }
         };
-        let dataset = &config.dataset;
-        Ok(with_depth_smoothing(
-            source,
-            dataset.depth_smoothing,
-            &dataset.bilateral,
-        ))
+        Ok(source)
     }
 
     /// Opens the recording: a connection, or the temporary sibling of the file (see
