@@ -98,16 +98,15 @@ pub struct RunArgs {
     pub instances: Option<InstancesArg>,
     /// The masks' borders: exact (rendered, annotated) or a 2D segmenter's (a pixel or two off,
     /// filling narrow gaps): `segmenter` trims mask pixels far behind their object and ignores a
-    /// band around every border [default: the config's `objects.bleed_*` and
-    /// `objects.mask_border_px`, exact]
+    /// band around every border [default: what a probe of 12 frames finds — a segmenter's when
+    /// the masks' borders stray from the depth's silhouettes; else the config's]
     #[arg(long, value_enum)]
     pub masks: Option<MasksArg>,
     /// The depth images: exact (rendered, Replica's) or a depth camera's (noise growing with
     /// distance, stray points): `camera` smooths each depth image with an edge-preserving
     /// bilateral filter before use, fits boxes to cloud voxels holding at least 3 points and
-    /// allows for the noise in what a view says of a point [default: the config's
-    /// `dataset.depth_smoothing`, `objects.box_min_voxel_points` and
-    /// `dataset.depth_noise_per_m2`, exact]
+    /// allows for the noise in what a view says of a point [default: what a probe of 12 frames
+    /// finds — a camera's when the depth's noise σ at 2 m is above 1 mm; else the config's]
     #[arg(long, value_enum)]
     pub depth: Option<DepthArg>,
     /// Continue the interrupted run whose output folder is DIR (from `DIR/checkpoint`), with the

@@ -90,30 +90,35 @@ fn the_readmes_own_data_walk_through_maps_a_tum_layout_sequence_with_per_frame_m
     assert!(!object_meshes(&out).is_empty(), "objects mapped: {stderr}");
     let summary = json(&out.join("summary.json"));
     assert_eq!(summary["frames"], 8, "eight frames mapped: {summary}");
-    if run.contains("--masks segmenter") {
-        let objects = &summary["config"]["objects"];
-        assert_eq!(
-            (&objects["bleed_radius_px"], &objects["mask_border_px"]),
-            (&serde_json::json!(4), &serde_json::json!(2)),
-            "--masks segmenter sets the trim and the border band: {objects}"
-        );
-    }
-    if run.contains("--depth camera") {
-        let config = &summary["config"];
-        assert_eq!(
-            (
-                &config["dataset"]["depth_smoothing"],
-                &config["objects"]["box_min_voxel_points"],
-                &config["dataset"]["depth_noise_per_m2"]
-            ),
-            (
-                &serde_json::json!("bilateral"),
-                &serde_json::json!(3),
-                &serde_json::json!(0.0025)
-            ),
-            "--depth camera smooths the depth, leaves lone voxels out of the boxes and allows for its noise: {config}"
-        );
-    }
+    // No flag: the probe finds the camera's noise and the segmenter's borders and takes the
+    // settings `--depth camera --masks segmenter` would.
+    let sensor = &summary["sensor"];
+    assert_eq!(
+        (&sensor["depth"], &sensor["masks"]),
+        (&serde_json::json!("camera"), &serde_json::json!("segmenter")),
+        "{sensor}"
+    );
+    let objects = &summary["config"]["objects"];
+    assert_eq!(
+        (&objects["bleed_radius_px"], &objects["mask_border_px"]),
+        (&serde_json::json!(4), &serde_json::json!(2)),
+        "a segmenter's masks get the trim and the border band: {objects}"
+    );
+    let config = &summary["config"];
+    assert_eq!(
+        (
+            &config["dataset"]["depth_smoothing"],
+            &config["objects"]["box_min_voxel_points"],
+        ),
+        (&serde_json::json!("bilateral"), &serde_json::json!(3)),
+        "a camera's depth is smoothed and lone voxels are left out of the boxes: {config}"
+    );
+    let sigma = &sensor["profile"]["depth_noise"];
+    let at_2m = sigma["sigma_floor_m"].as_f64().unwrap_or(0.0) + 4.0 * sigma["sigma_per_m2"].as_f64().unwrap_or(0.0);
+    assert!(
+        (0.004..0.009).contains(&at_2m),
+        "the probe's σ(2 m) is the Kinect-like camera's 6.1 mm: {sensor}"
+    );
     let metrics = json(&out.join("metrics.json"));
     let scored = metrics["objects"].as_array().map_or(0, Vec::len);
     assert!(scored > 0, "objects scored against the scene's gt_meshes: {metrics}");
