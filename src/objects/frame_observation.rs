@@ -130,7 +130,41 @@ impl ObjectObservation {
     pub fn majority_class(&self) -> Option<ClassId> {
         majority_class(&self.class_votes.iter().map(|(&c, &n)| (c, u64::from(n))).collect())
     }
+
+    /// How many of its pixels have a depth in `depth_m` (the frame's, row-major; 0 = none).
+    pub fn pixels_with_depth(&self, depth_m: &[f32]) -> usize {
+        self.pixels
+            .iter()
+            .filter(|&&i| depth_m.get(i as usize).is_some_and(|&d| d > 0.0 && d.is_finite()))
+            .count()
+    }
 }
+
+/// An object's mask pixels over its views, and how many of them had a depth: an object whose
+/// pixels mostly lack one (beyond the camera's range, dark or shiny) is mapped from little.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct DepthCoverage {
+    /// Mask pixels over every view.
+    pub pixels: u64,
+    /// Those with a depth.
+    pub with_depth: u64,
+}
+
+impl DepthCoverage {
+    /// Adds one view: `observation` in a frame of depth `depth_m`.
+    pub fn add(&mut self, observation: &ObjectObservation, depth_m: &[f32]) {
+        self.pixels += observation.pixels.len() as u64;
+        self.with_depth += observation.pixels_with_depth(depth_m) as u64;
+    }
+
+    /// The share of pixels with a depth (`None` before any pixel).
+    pub fn share(&self) -> Option<f32> {
+        (self.pixels > 0).then(|| self.with_depth as f32 / self.pixels as f32)
+    }
+}
+
+/// Below this share of its pixels with a depth, an object is reported as mapped from little.
+pub const LOW_DEPTH_SHARE: f32 = 0.5;
 
 /// Adds this frame's votes `new` to an object's `votes`; returns its class now (the majority).
 pub fn add_class_votes(votes: &mut BTreeMap<ClassId, u64>, new: &BTreeMap<ClassId, u32>) -> Option<ClassId> {
@@ -193,6 +227,28 @@ mod tests {
         );
         assert_eq!(chair.class_votes[&ClassId(20)], 2);
         assert_eq!(obs.background_pixels, [0, 3, 4, 6, 7, 8]);
+    }
+
+    #[test]
+    fn an_objects_depth_coverage_counts_its_pixels_with_a_depth_over_its_views() {
+        use InstanceLabel::{Background as B, Object as O};
+        let a = O(ObjectId(3));
+        let mut frame = frame_with(&[B, a, a, B, B, a, B, B, B], &[0, 20, 20, 0, 0, 20, 0, 0, 0], 3);
+        frame.depth_m[2] = 0.0;
+        frame.depth_m[5] = f32::NAN;
+        let cfg = ObjectConfig {
+            min_box_side_px: 0,
+            ..ObjectConfig::default()
+        };
+        let chair = &observe_objects(&frame, &cfg).objects[&ObjectId(3)];
+        assert_eq!(chair.pixels_with_depth(&frame.depth_m), 1);
+        let mut coverage = DepthCoverage::default();
+        assert_eq!(coverage.share(), None);
+        coverage.add(chair, &frame.depth_m);
+        frame.depth_m = vec![2.0; 9];
+        coverage.add(chair, &frame.depth_m);
+        assert_eq!((coverage.pixels, coverage.with_depth), (6, 4));
+        assert_eq!(coverage.share(), Some(4.0 / 6.0));
     }
 
     #[test]

@@ -129,7 +129,7 @@ fn silhouette_offset(depth_at: impl Fn(i64) -> Option<f32>) -> Option<i64> {
             && d - near > EDGE_STEP_M + EDGE_STEP_SHARE * near
         {
             let offset = 0.clamp(a, t - 1);
-            let hidden = t > a + 1 && a <= 0 && t - 1 >= 0;
+            let hidden = t > a + 1 && a <= 0 && t > 0;
             if best.is_none_or(|(b, _)| offset.abs() < b.abs()) {
                 best = Some((offset, hidden));
             }

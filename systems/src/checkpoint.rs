@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use crate::components::CategorySlot;
 use crate::components::{
     Background, Category, ClassVotes, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Membership, Object,
-    ObjectBounds, ObjectClass, ObjectCloud, ObjectRng, Reliability, Subcategories, VisibleFrames,
+    ObjectBounds, ObjectClass, ObjectCloud, ObjectDepthCoverage, ObjectRng, Reliability, Subcategories, VisibleFrames,
 };
 use crate::resources::CategoryFields;
 use crate::resources::{
@@ -45,6 +45,8 @@ struct ObjectState {
     latest_box: LatestBox,
     keyframes: Keyframes,
     visible: VisibleFrames,
+    #[serde(default)]
+    depth_coverage: ObjectDepthCoverage,
     cloud: ObjectCloud,
     rng: ObjectRng,
     bounds: Option<ObjectBounds>,
@@ -217,6 +219,7 @@ fn object_state(world: &World, entity: Entity) -> Result<ObjectState, CatmapErro
         latest_box: *e.get::<LatestBox>().ok_or_else(|| need("box"))?,
         keyframes: e.get::<Keyframes>().ok_or_else(|| need("keyframes"))?.clone(),
         visible: *e.get::<VisibleFrames>().ok_or_else(|| need("visible frames"))?,
+        depth_coverage: *e.get::<ObjectDepthCoverage>().ok_or_else(|| need("depth coverage"))?,
         cloud: e.get::<ObjectCloud>().ok_or_else(|| need("cloud"))?.clone(),
         rng: e.get::<ObjectRng>().ok_or_else(|| need("generator"))?.clone(),
         bounds: e.get::<ObjectBounds>().copied(),
@@ -305,6 +308,7 @@ pub(crate) fn restore(
             o.latest_box,
             o.keyframes,
             o.visible,
+            o.depth_coverage,
             o.cloud,
             o.rng,
         ));

@@ -88,6 +88,10 @@ pub struct Keyframes(pub KeyframeWindow<ObjectView>);
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct VisibleFrames(pub u64);
 
+/// The object's mask pixels over its views and how many had a depth.
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ObjectDepthCoverage(pub catmap::objects::frame_observation::DepthCoverage);
+
 /// The object's observed points, accumulated in a voxel grid.
 #[derive(Component, Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ObjectCloud(pub ObservedCloud);

@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use crate::components::{
     Background, Category, ClassVotes, Keyframes, LatestBox, Object, ObjectBounds, ObjectClass, ObjectCloud,
-    VisibleFrames,
+    ObjectDepthCoverage, VisibleFrames,
 };
 use crate::resources::{DatasetClasses, StreamProgress};
 
@@ -26,6 +26,8 @@ pub struct ObjectSnapshot {
     pub class_votes: Vec<(ClassId, u64)>,
     /// Frames the object was visible in.
     pub visible_frames: u64,
+    /// Share of its mask pixels over its views that had a depth.
+    pub depth_share: Option<f32>,
     /// Frames in its keyframe window, in slot order.
     pub keyframes: Vec<FrameIndex>,
     /// Latest 2D boxes.
@@ -91,6 +93,7 @@ impl MapSnapshot {
                 &ObjectClass,
                 &ClassVotes,
                 &VisibleFrames,
+                &ObjectDepthCoverage,
                 &Keyframes,
                 &LatestBox,
                 &ObjectCloud,
@@ -98,12 +101,13 @@ impl MapSnapshot {
             )>()
             .iter(world)
             .map(
-                |(object, class, votes, visible, keyframes, latest, cloud, bounds)| ObjectSnapshot {
+                |(object, class, votes, visible, coverage, keyframes, latest, cloud, bounds)| ObjectSnapshot {
                     id: object.id,
                     class: class.0,
                     class_name: names.name(class.0),
                     class_votes: votes.0.iter().map(|(&c, &n)| (c, n)).collect(),
                     visible_frames: visible.0,
+                    depth_share: coverage.0.share(),
                     keyframes: keyframes.0.frames(),
                     latest_box: *latest,
                     cloud_points: cloud.0.len(),

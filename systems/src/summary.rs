@@ -42,6 +42,11 @@ pub struct ObjectRow {
     /// rays are mirrored across it as well (`fields.object_rays.mirror_planes`).
     #[serde(default)]
     pub second_mirror_plane: Option<catmap::geometry::mirror_symmetry::MirrorPlane>,
+    /// Share of its mask pixels over its views that had a depth: below one half, most of what
+    /// the camera saw of it had no return (beyond the range, dark or shiny) and its map rests on
+    /// little.
+    #[serde(default)]
+    pub depth_share: Option<f32>,
 }
 
 /// What a run did and how long each stage took.
@@ -165,6 +170,7 @@ impl RunSummary {
                 bounds: o.bounds,
                 mirror_plane: o.mirror_plane,
                 second_mirror_plane: o.second_mirror_plane,
+                depth_share: o.depth_share,
             })
             .collect();
         let mut objects_per_class = BTreeMap::new();
@@ -233,6 +239,23 @@ impl RunSummary {
             "| **wall clock** | {:.2} ({:.1} frames/s) |",
             self.total_seconds, self.frames_per_second
         );
+        let little: Vec<String> = self
+            .objects
+            .iter()
+            .filter_map(|o| {
+                let share = o
+                    .depth_share
+                    .filter(|&s| s < catmap::objects::frame_observation::LOW_DEPTH_SHARE)?;
+                Some(format!("{} {} ({:.0} %)", o.class_name, o.id, 100.0 * share))
+            })
+            .collect();
+        if !little.is_empty() {
+            let _ = writeln!(
+                out,
+                "\nmost pixels with no depth (beyond the camera's range, dark or shiny; mapped from little): {}",
+                little.join(", ")
+            );
+        }
         if let Some(peak) = self.peak_resident_mib {
             let _ = writeln!(out, "\npeak memory: {peak:.0} MiB resident");
         }
@@ -273,7 +296,27 @@ mod tests {
             bounds: None,
             mirror_plane: None,
             second_mirror_plane: None,
+            depth_share: None,
         }
+    }
+
+    #[test]
+    fn objects_whose_pixels_mostly_had_no_depth_are_named_in_the_table() {
+        let lamp = ObjectRow {
+            depth_share: Some(0.3),
+            ..row(4, 47)
+        };
+        let chair = ObjectRow {
+            depth_share: Some(0.9),
+            ..row(3, 20)
+        };
+        let table = summary_with(vec![chair, lamp]).table();
+        let line = table
+            .lines()
+            .find(|l| l.contains("no depth"))
+            .expect("a line names them");
+        assert!(line.contains("lamp 4 (30 %)") && !line.contains("chair"), "{line}");
+        assert!(!summary_with(vec![row(3, 20)]).table().contains("no depth"));
     }
 
     #[test]

@@ -10,7 +10,7 @@ use catmap::sensor::pixel_box::PixelBox;
 
 use crate::components::{
     Background, CameraFrame, ClassVotes, FrameObservations, Keyframes, LatestBox, Object, ObjectClass, ObjectCloud,
-    ObjectRng, VisibleFrames,
+    ObjectDepthCoverage, ObjectRng, VisibleFrames,
 };
 use crate::resources::{ObjectIndex, Settings, StageTimes};
 
@@ -38,6 +38,7 @@ pub fn spawn_new_objects(
                     LatestBox::of(frame.0.index, observation, None),
                     Keyframes::default(),
                     VisibleFrames::default(),
+                    ObjectDepthCoverage::default(),
                     ObjectCloud(ObservedCloud::new(config.objects.cloud_voxel_m)),
                     ObjectRng(seeded_rng(config.seed, RngStream::Object(id))),
                 ))
@@ -58,12 +59,13 @@ type ViewedObjects<'w, 's> = Query<
         &'static mut LatestBox,
         &'static mut Keyframes,
         &'static mut VisibleFrames,
+        &'static mut ObjectDepthCoverage,
         &'static mut ObjectRng,
     ),
 >;
 
 /// Adds each new frame's view of an object: class votes (the class follows the majority),
-/// latest 2D box, visible-frame count and keyframe window.
+/// latest 2D box, visible-frame count, depth coverage and keyframe window.
 pub fn record_object_views(
     settings: Res<Settings>,
     frames: Query<(&CameraFrame, &FrameObservations), Added<FrameObservations>>,
@@ -74,7 +76,7 @@ pub fn record_object_views(
     let _timer = times.start("objects");
     for (frame, observations) in &frames {
         for (id, observation) in &observations.0.objects {
-            let Some((mut votes, mut class, mut latest, mut keyframes, mut visible, mut rng)) =
+            let Some((mut votes, mut class, mut latest, mut keyframes, mut visible, mut coverage, mut rng)) =
                 index.0.get(id).and_then(|&e| objects.get_mut(e).ok())
             else {
                 tracing::warn!(object = %id, "observed object has no entity");
@@ -84,6 +86,7 @@ pub fn record_object_views(
                 class.set_if_neq(ObjectClass(majority));
             }
             visible.0 += 1;
+            coverage.0.add(observation, &frame.0.depth_m);
             let view = ObjectView::crop(&frame.0, observation.sample_box, ViewOwner::Object(*id))
                 .with_depth_noise(settings.0.dataset.depth_noise_per_m2);
             let keyframes_cfg = &settings.0.keyframes;
