@@ -153,6 +153,63 @@ impl SensorChoice {
     }
 }
 
+impl SensorChoice {
+    /// The choice and the profile as a short Markdown page (the recording's `sensor` entity).
+    pub fn markdown(&self) -> String {
+        use std::fmt::Write as _;
+        let by = |c: ChosenBy| match c {
+            ChosenBy::Flag => "flag",
+            ChosenBy::Probe => "probe",
+        };
+        let mut out = format!(
+            "# Sensor\n\ndepth: **{:?}** ({}), masks: **{:?}** ({})\n",
+            self.depth,
+            by(self.depth_chosen_by),
+            self.masks,
+            by(self.masks_chosen_by)
+        );
+        let Some(p) = &self.profile else {
+            return out;
+        };
+        let _ = write!(
+            out,
+            "\nProbe of {} frames: {:.0} % of the pixels have a depth",
+            p.frames,
+            100.0 * p.valid_depth_share
+        );
+        if let Some(m) = p.depth_noise {
+            let _ = write!(
+                out,
+                "; σ(d) = {:.2} mm + {:.2} mm · d² (σ at 2 m {:.1} mm), range {:.2} m",
+                1000.0 * m.sigma_floor_m,
+                1000.0 * m.sigma_per_m2,
+                1000.0 * m.sigma_m(2.0),
+                m.range_m
+            );
+        }
+        if let Some(b) = p.mask_borders {
+            let _ = write!(
+                out,
+                "; mask borders off their silhouette: {:.0} % of {} samples (90 % within {} px)",
+                100.0 * b.off_share,
+                b.samples,
+                b.p90_px
+            );
+        }
+        out.push_str(".\n\n| depth, m | σ, mm | patches |\n|---:|---:|---:|\n");
+        for bin in &p.depth_noise_bins {
+            let _ = writeln!(
+                out,
+                "| {:.2} | {:.2} | {} |",
+                bin.depth_m,
+                1000.0 * bin.sigma_m,
+                bin.patches
+            );
+        }
+        out
+    }
+}
+
 /// The positions of `count` frames spread evenly over a stream of `len` (all of them when it is
 /// shorter), first and last included.
 pub fn probe_positions(len: usize, count: usize) -> Vec<usize> {
@@ -253,6 +310,28 @@ mod tests {
             (DepthImages::Camera, MaskBorders::Segmenter),
             "{profile:?}"
         );
+    }
+
+    #[test]
+    fn the_markdown_page_states_the_choice_and_the_fit() {
+        let mut noisy = profile(0.006, 0.6);
+        noisy.depth_noise_bins = vec![DepthNoiseBin {
+            depth_m: 2.125,
+            sigma_m: 0.0061,
+            patches: 700,
+        }];
+        let page = SensorChoice::resolve(None, Some(MaskBorders::Exact), Some(noisy)).markdown();
+        assert!(
+            page.contains("depth: **Camera** (probe), masks: **Exact** (flag)"),
+            "{page}"
+        );
+        assert!(
+            page.contains("σ at 2 m 6.0 mm") && page.contains("range 5.00 m"),
+            "{page}"
+        );
+        assert!(page.contains("| 2.12 | 6.10 | 700 |"), "{page}");
+        let flags = SensorChoice::resolve(Some(DepthImages::Exact), Some(MaskBorders::Exact), None).markdown();
+        assert!(!flags.contains("Probe"), "{flags}");
     }
 
     #[test]

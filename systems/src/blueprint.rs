@@ -2,12 +2,13 @@
 //! beside it shows the objects alone, with their subcategory boxes — the representative
 //! labelled "rep" — and uncertainty spheres); on the right the camera's view with its instance
 //! masks, and one time series per training quantity (field losses, steps, the carving share),
-//! so that convergence shows at a glance, and a live stream's frames per second and drops.
+//! so that convergence shows at a glance, a live stream's frames per second and drops, and what
+//! the probe found of the camera and the masks.
 //! Entity paths come from [`crate::rerun_paths`].
 
 use rerun::blueprint::{
-    Blueprint, BlueprintActivation, ContainerLike, Horizontal, Spatial2DView, Spatial3DView, Tabs, TimeSeriesView,
-    Vertical,
+    Blueprint, BlueprintActivation, ContainerLike, Horizontal, Spatial2DView, Spatial3DView, Tabs, TextDocumentView,
+    TimeSeriesView, Vertical,
 };
 
 use crate::rerun_paths::{self as paths, OwnerEntity};
@@ -29,6 +30,8 @@ pub mod titles {
     pub const CARVING: &str = "Carving share";
     /// A live stream's frames taken per second and frames dropped.
     pub const STREAM: &str = "Live stream";
+    /// What the probe found of the camera and the masks, and the settings taken.
+    pub const SENSOR: &str = "Sensor";
 }
 
 /// The mapper's viewer layout.
@@ -56,6 +59,9 @@ pub fn mapper_blueprint() -> Blueprint {
         series(titles::CARVING, OwnerEntity::CarvingShare),
         TimeSeriesView::new(titles::STREAM)
             .with_origin(format!("/{}", paths::STREAM))
+            .into(),
+        TextDocumentView::new(titles::SENSOR)
+            .with_origin(format!("/{}", paths::SENSOR))
             .into(),
     ])
     .into();

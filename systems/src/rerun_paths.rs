@@ -27,6 +27,9 @@ pub const STREAM_RATE: &str = "stream/frames_per_second";
 /// A live stream's frames dropped so far (scalar, once a second).
 pub const STREAM_DROPPED: &str = "stream/frames_dropped";
 
+/// What the probe of the dataset found and the settings taken (Markdown, static).
+pub const SENSOR: &str = "sensor";
+
 /// The stream's timeline: the newest frame's index.
 pub const FRAME_TIMELINE: &str = "frame";
 /// The wall clock, beside every other timeline.
@@ -183,10 +186,20 @@ mod tests {
         const ID: u32 = 424_242;
         const N: u32 = 31_337;
         let object = |path: String| path.replace(&ID.to_string(), "{id}");
-        let mut paths: Vec<String> = [WORLD, CAMERA, IMAGE, RGB, DEPTH, INSTANCES, STREAM_RATE, STREAM_DROPPED]
-            .iter()
-            .map(|p| (*p).to_owned())
-            .collect();
+        let mut paths: Vec<String> = [
+            WORLD,
+            CAMERA,
+            IMAGE,
+            RGB,
+            DEPTH,
+            INSTANCES,
+            STREAM_RATE,
+            STREAM_DROPPED,
+            SENSOR,
+        ]
+        .iter()
+        .map(|p| (*p).to_owned())
+        .collect();
         paths.extend(
             every_owner_entity()
                 .into_iter()

@@ -88,6 +88,9 @@ pub fn drive(start: Start, plan: RunPlan, source: Arc<dyn FrameSource>, started:
     }
     let mut checkpoints = Checkpoints::new(&plan, config.checkpoint.clone(), started, live.enabled);
     if let Some(recording) = plan.open_recording(positions.len(), &config.rerun)? {
+        if let Some(choice) = &plan.sensor {
+            catmap_systems::stages::log_rerun::log_sensor(&recording, &choice.markdown());
+        }
         mapper.set_recording(recording);
     }
     let mut bars = PhaseBars::new(&config, positions.len() as u64, dropped);

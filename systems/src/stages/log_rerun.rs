@@ -36,6 +36,14 @@ pub fn log_world_setup(rerun: &rerun::RecordingStream) {
     );
 }
 
+/// Logs the depth and mask settings and what the probe found (`report`: Markdown), once.
+pub fn log_sensor(rerun: &rerun::RecordingStream, report: &str) {
+    warn_on_error(
+        rerun.log_static(paths::SENSOR, &rerun::TextDocument::from_markdown(report)),
+        paths::SENSOR,
+    );
+}
+
 /// Logs the legend of the instance image (object id → class name and colour) when objects
 /// appear or change class.
 pub fn log_instance_legend(

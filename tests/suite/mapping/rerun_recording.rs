@@ -146,6 +146,7 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         (titles::STEPS, "TimeSeries", "/training/steps"),
         (titles::CARVING, "TimeSeries", "/training/carving_share"),
         (titles::STREAM, "TimeSeries", "/stream"),
+        (titles::SENSOR, "TextDocument", "/sensor"),
     ] {
         let view = blueprint
             .iter()
