@@ -257,3 +257,7 @@ mod tests;
 #[cfg(test)]
 #[path = "sensor_noise_family_tests.rs"]
 mod family_tests;
+
+#[cfg(test)]
+#[path = "sensor_noise_segmenter_tests.rs"]
+mod segmenter_tests;

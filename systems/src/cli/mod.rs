@@ -10,4 +10,5 @@ pub mod run;
 pub mod run_outputs;
 pub mod run_phases;
 pub mod run_plan;
+pub mod sensor_choice;
 pub mod synth;

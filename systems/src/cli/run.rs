@@ -6,11 +6,8 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 
-use catmap::config::sensor_profile::{SensorChoice, SensorProfile};
-use catmap::objects::config::MaskBorders;
-use catmap::sensor::depth_smoothing::DepthImages;
-
 use crate::cli::run_plan::{DatasetFormat, MapMode, Recording, RunPlan};
+use crate::cli::sensor_choice::sensor_choice;
 use crate::cli::synth::{PresetArg, write_scene};
 
 /// Arguments of `catmap run`.
@@ -221,7 +218,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         )?;
     }
     let raw = plan.open_raw_source(&config)?;
-    let choice = sensor_choice(args, raw.as_ref());
+    let choice = sensor_choice(args.depth, args.masks, raw.as_ref());
     let config = choice.apply(config);
     plan.sensor = Some(choice);
     let dataset_config = &config.dataset;
@@ -237,34 +234,6 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         Arc::clone(&source),
         started,
     )
-}
-
-/// The depth and mask settings: `--depth` and `--masks` where given, else what a probe of the
-/// dataset's frames finds (logged).
-fn sensor_choice(args: &RunArgs, source: &dyn catmap::dataset::FrameSource) -> SensorChoice {
-    let depth = args.depth.map(|d| match d {
-        DepthArg::Exact => DepthImages::Exact,
-        DepthArg::Camera => DepthImages::Camera,
-    });
-    let masks = args.masks.map(|m| match m {
-        MasksArg::Exact => MaskBorders::Exact,
-        MasksArg::Segmenter => MaskBorders::Segmenter,
-    });
-    let profile = (depth.is_none() || masks.is_none()).then(|| SensorProfile::probe(source));
-    if let Some(profile) = &profile {
-        let noise = profile.depth_noise;
-        tracing::info!(
-            frames = profile.frames,
-            sigma_at_2m_mm = noise.map(|n| n.sigma_m(2.0) * 1000.0),
-            range_m = noise.map(|n| n.range_m),
-            valid_depth = profile.valid_depth_share,
-            mask_borders_off = profile.mask_borders.map(|m| m.off_share),
-            "sensor probed"
-        );
-    }
-    let choice = SensorChoice::resolve(depth, masks, profile);
-    tracing::info!(depth = ?choice.depth, by = ?choice.depth_chosen_by, masks = ?choice.masks, masks_by = ?choice.masks_chosen_by, "sensor settings");
-    choice
 }
 
 /// The configuration: the config file (or the defaults) with the command line's overrides.

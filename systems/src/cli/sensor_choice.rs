@@ -1,0 +1,40 @@
+//! `catmap run`'s depth and mask settings: the flags where given, else the probe of the dataset's
+//! frames (`catmap::config::sensor_profile`), logged.
+
+use catmap::config::sensor_profile::{SensorChoice, SensorProfile};
+use catmap::objects::config::MaskBorders;
+use catmap::sensor::depth_smoothing::DepthImages;
+
+use crate::cli::run::{DepthArg, MasksArg};
+
+/// The depth and mask settings: `--depth` and `--masks` where given, else what a probe of the
+/// dataset's frames finds (logged).
+pub fn sensor_choice(
+    depth: Option<DepthArg>,
+    masks: Option<MasksArg>,
+    source: &dyn catmap::dataset::FrameSource,
+) -> SensorChoice {
+    let depth = depth.map(|d| match d {
+        DepthArg::Exact => DepthImages::Exact,
+        DepthArg::Camera => DepthImages::Camera,
+    });
+    let masks = masks.map(|m| match m {
+        MasksArg::Exact => MaskBorders::Exact,
+        MasksArg::Segmenter => MaskBorders::Segmenter,
+    });
+    let profile = (depth.is_none() || masks.is_none()).then(|| SensorProfile::probe(source));
+    if let Some(profile) = &profile {
+        let noise = profile.depth_noise;
+        tracing::info!(
+            frames = profile.frames,
+            sigma_at_2m_mm = noise.map(|n| n.sigma_m(2.0) * 1000.0),
+            range_m = noise.map(|n| n.range_m),
+            valid_depth = profile.valid_depth_share,
+            mask_borders_off = profile.mask_borders.map(|m| m.off_share),
+            "sensor probed"
+        );
+    }
+    let choice = SensorChoice::resolve(depth, masks, profile);
+    tracing::info!(depth = ?choice.depth, by = ?choice.depth_chosen_by, masks = ?choice.masks, masks_by = ?choice.masks_chosen_by, "sensor settings");
+    choice
+}
