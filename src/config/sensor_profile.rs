@@ -47,11 +47,12 @@ pub struct SensorProfile {
 
 impl SensorProfile {
     /// The profile of `frames`.
-    pub fn of_frames<'a>(frames: impl IntoIterator<Item = &'a RgbdFrame>) -> Self {
+    pub fn of_frames<F: std::borrow::Borrow<RgbdFrame>>(frames: impl IntoIterator<Item = F>) -> Self {
         let mut depth = DepthNoiseEstimator::default();
         let mut borders = MaskBorderEstimator::default();
         let mut count = 0;
         for frame in frames {
+            let frame = frame.borrow();
             depth.add_frame(&frame.depth_m, &frame.intrinsics);
             borders.add_frame(&frame.instances, &frame.depth_m, frame.intrinsics.width as usize);
             count += 1;
@@ -68,11 +69,11 @@ impl SensorProfile {
     /// The profile of [`PROBE_FRAMES`] frames of `source` spread over it; a frame that cannot be
     /// read is left out (the run reports it when it reaches it).
     pub fn probe(source: &dyn FrameSource) -> Self {
-        let frames: Vec<RgbdFrame> = probe_positions(source.len(), PROBE_FRAMES)
-            .into_iter()
-            .filter_map(|position| source.read_frame(position).ok())
-            .collect();
-        Self::of_frames(&frames)
+        Self::of_frames(
+            probe_positions(source.len(), PROBE_FRAMES)
+                .into_iter()
+                .filter_map(|position| source.read_frame(position).ok()),
+        )
     }
 
     /// A depth camera's images when σ(2 m) is above [`CAMERA_SIGMA_AT_2M_M`], else exact ones.

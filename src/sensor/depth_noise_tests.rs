@@ -4,14 +4,7 @@ use crate::synth::sensor_noise::{DepthNoise, InstanceIds, MaskNoise, SensorSetti
 use crate::synth::{Preset, SyntheticScene};
 
 fn intrinsics(w: u32, h: u32) -> CameraIntrinsics {
-    CameraIntrinsics {
-        width: w,
-        height: h,
-        fx: 0.8 * w as f32,
-        fy: 0.8 * w as f32,
-        cx: (w as f32 - 1.0) / 2.0,
-        cy: (h as f32 - 1.0) / 2.0,
-    }
+    CameraIntrinsics::centred(w, h, 0.8 * w as f32)
 }
 
 /// A frame of tilted planes at depths 1 to 5 m (one per band of columns), each pixel's depth

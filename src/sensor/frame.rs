@@ -28,6 +28,19 @@ pub struct CameraIntrinsics {
 }
 
 impl CameraIntrinsics {
+    /// A `width` × `height` camera of focal length `focal_px` on both axes, its principal point at
+    /// the image's centre.
+    pub fn centred(width: u32, height: u32, focal_px: f32) -> Self {
+        Self {
+            width,
+            height,
+            fx: focal_px,
+            fy: focal_px,
+            cx: (width as f32 - 1.0) / 2.0,
+            cy: (height as f32 - 1.0) / 2.0,
+        }
+    }
+
     /// Replica's camera as the vMAP layout assumes it: 1200×680, f = 600, c = (599.5, 339.5).
     pub const REPLICA: Self = Self {
         width: 1200,

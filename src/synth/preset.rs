@@ -54,15 +54,7 @@ impl Preset {
             Self::Small => (160, 120),
             Self::Default | Self::Living => (640, 480),
         };
-        let f = 0.8 * width as f32;
-        CameraIntrinsics {
-            width,
-            height,
-            fx: f,
-            fy: f,
-            cx: (width as f32 - 1.0) / 2.0,
-            cy: (height as f32 - 1.0) / 2.0,
-        }
+        CameraIntrinsics::centred(width, height, 0.8 * width as f32)
     }
 
     /// Number of frames of the trajectory.

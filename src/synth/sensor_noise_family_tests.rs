@@ -19,14 +19,7 @@ pub(super) fn frame(
     let n = (w * h) as usize;
     let mut f = RenderedFrame {
         world_from_camera: Isometry3::identity(),
-        intrinsics: CameraIntrinsics {
-            width: w,
-            height: h,
-            fx: 0.8 * w as f32,
-            fy: 0.8 * w as f32,
-            cx: (w as f32 - 1.0) / 2.0,
-            cy: (h as f32 - 1.0) / 2.0,
-        },
+        intrinsics: CameraIntrinsics::centred(w, h, 0.8 * w as f32),
         rgb: (0..n).map(|i| [100 + (i * 7919 % 41) as u8; 3]).collect(),
         depth_m: vec![wall_m; n],
         instance_ids: vec![101; n],
