@@ -9,12 +9,13 @@
 use std::collections::BTreeMap;
 
 use crate::ids::ObjectId;
-use crate::sensor::frame::InstanceMask;
+use crate::sensor::frame::{InstanceLabel, InstanceMask};
 
 /// Pixel counts per associated object and ground-truth object.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct AssociationTally {
     counts: BTreeMap<ObjectId, BTreeMap<ObjectId, u64>>,
+    on_background: BTreeMap<ObjectId, u64>,
 }
 
 /// One associated object against the truth.
@@ -28,14 +29,22 @@ pub struct AssociatedObject {
     pub purity: f32,
     /// Its counted pixels.
     pub pixels: u64,
+    /// Its pixels where the exact render shows the background (the mask bled onto a wall or the
+    /// floor), not counted in `pixels`.
+    pub background_pixels: u64,
 }
 
 impl AssociationTally {
     /// Counts one frame: `associated` is the association's mask, `truth` the exact render's.
     pub fn add(&mut self, associated: &InstanceMask, truth: &InstanceMask) {
         for i in 0..associated.len().min(truth.len()) {
-            if let (Some(id), Some(true_id)) = (associated.object_at(i), truth.object_at(i)) {
-                *self.counts.entry(id).or_default().entry(true_id).or_default() += 1;
+            let Some(id) = associated.object_at(i) else {
+                continue;
+            };
+            match truth.label(i) {
+                InstanceLabel::Object(true_id) => *self.counts.entry(id).or_default().entry(true_id).or_default() += 1,
+                InstanceLabel::Background => *self.on_background.entry(id).or_default() += 1,
+                InstanceLabel::Unknown | InstanceLabel::Unsure => {}
             }
         }
     }
@@ -52,6 +61,7 @@ impl AssociationTally {
                     truth,
                     purity: n as f32 / total as f32,
                     pixels: total,
+                    background_pixels: self.on_background.get(&id).copied().unwrap_or(0),
                 })
             })
             .collect()
@@ -61,7 +71,6 @@ impl AssociationTally {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sensor::frame::InstanceLabel;
 
     fn mask(ids: &[u32]) -> InstanceMask {
         InstanceMask::from_labels(ids.iter().map(|&id| match id {
@@ -78,6 +87,7 @@ mod tests {
         let objects = tally.objects();
         assert_eq!(objects.len(), 2);
         assert_eq!((objects[0].truth, objects[0].pixels), (ObjectId(7), 5));
+        assert_eq!(objects[0].background_pixels, 1, "the wall pixel is counted apart");
         assert!((objects[0].purity - 0.8).abs() < 1e-6);
         assert_eq!((objects[1].truth, objects[1].purity), (ObjectId(8), 1.0));
     }

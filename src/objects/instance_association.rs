@@ -2,16 +2,21 @@
 //! "per-frame"`): what a 2D segmenter gives (ids that mean nothing beyond their frame, objects
 //! missed in some frames, spurious masks, splits and merges) made into stable object ids.
 //!
-//! The [`InstanceTracker`] keeps, per object, the coarse voxels (`voxel_m`) its associated masks'
-//! points fell into. A mask of frame *t* (its back-projected points, at most
+//! The [`InstanceTracker`] keeps, per object, a [`Footprint`]: the coarse voxels (`voxel_m`) its
+//! masks' points fell into, each with how often the object's masks covered it and how often other
+//! masks did while the object was seen apart; a voxel **holds** for the object once two of its
+//! frames covered it and its own frames outnumber the others (one mask is no evidence: a
+//! segmenter's merge). A mask of frame *t* (its back-projected points, at most
 //! `max_points_per_mask`, and its majority class) is decided against the state before frame
 //! *t*:
 //! - its **overlap** with an object of its class is the share of its points whose voxel or one of
-//!   the 26 around it the object holds;
+//!   the 26 around it holds for the object;
 //! - the object of highest overlap takes it when the overlap is at least `min_overlap`, unless a
 //!   second object of the class overlaps it by at least `ambiguity_ratio` × that (and
 //!   `min_overlap`): the mask spans two objects (a segmenter's merge) and is held back;
-//! - several masks may go to one object (a split object);
+//! - several masks may go to one object (a split object): the one of highest overlap, and any
+//!   other most of whose points lie on the object ([`SPLIT_MASK_OVERLAP`]); a mask below that is
+//!   decided again without the object (a neighbour the object's footprint reaches);
 //! - a mask no object of its class takes but that an object of **another class** overlaps by at
 //!   least `confused_class_overlap` shows that object under a confused class (a segmenter's
 //!   occasional wrong class): it is held back and starts no candidate, so a few confused masks of
@@ -19,20 +24,22 @@
 //! - a mask no object takes goes to the **candidate** of its class it overlaps most (at least
 //!   `min_overlap`), else starts a new candidate. A candidate seen in `min_frames` frames becomes an
 //!   object with the next free id (1, 2, …); one not seen for `candidate_window_frames` frames is
-//!   forgotten, so a spurious mask never makes an object;
+//!   forgotten, so a spurious mask never makes an object. A candidate that two masks of one frame
+//!   go to was two objects seen as one mask: it is dropped and each mask starts a candidate;
 //! - a mask with fewer than `min_points` valid depth points is held back.
 //!
+//! An object's footprint grows only into voxels no other object holds and no candidate of its
+//! class covers: what a mask merging it with a neighbour not yet made adds is the neighbour's.
 //! Held-back masks' pixels become unsure ([`crate::objects::segment::relabel_instances`]). Decisions
 //! depend only on the masks and the state, never on the masks' own ids or their order.
 
-use std::collections::{BTreeMap, BTreeSet, HashSet};
-use std::hash::BuildHasherDefault;
+use std::collections::{BTreeMap, BTreeSet};
 
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use crate::ids::{ClassId, FrameIndex, ObjectId};
-use crate::objects::observed_cloud::VoxelKeyHasher;
+use crate::objects::mask_footprint::{Counted, Footprint, VoxelKeys, voxel_keys};
 
 /// Where object ids come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -120,16 +127,6 @@ pub enum MaskFate {
     Held(HoldReason),
 }
 
-type VoxelSet = HashSet<u64, BuildHasherDefault<VoxelKeyHasher>>;
-
-/// Points kept as coarse voxels, with their class.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-struct Footprint {
-    class: ClassId,
-    voxels: VoxelSet,
-    last_seen: u64,
-}
-
 /// A mask seen too few times yet.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 struct Candidate {
@@ -142,47 +139,6 @@ struct Candidate {
 pub struct InstanceTracker {
     objects: BTreeMap<ObjectId, Footprint>,
     candidates: Vec<Candidate>,
-}
-
-/// Packs voxel `(x, y, z)` (21 bits each) into a key.
-fn key(x: i64, y: i64, z: i64) -> u64 {
-    const MASK: i64 = (1 << 21) - 1;
-    const OFFSET: i64 = 1 << 20;
-    let c = |v: i64| ((v + OFFSET) & MASK) as u64;
-    (c(x) << 42) | (c(y) << 21) | c(z)
-}
-
-/// Whether voxel `[x, y, z]` or one of the 26 around it is in `voxels`.
-fn near(voxels: &VoxelSet, [x, y, z]: [i64; 3]) -> bool {
-    (-1..=1).any(|dx| (-1..=1).any(|dy| (-1..=1).any(|dz| voxels.contains(&key(x + dx, y + dy, z + dz)))))
-}
-
-fn cell(p: &Point3<f32>, voxel_m: f32) -> [i64; 3] {
-    [p.x, p.y, p.z].map(|v| (v / voxel_m).floor() as i64)
-}
-
-impl Footprint {
-    fn new(class: ClassId) -> Self {
-        Self {
-            class,
-            voxels: VoxelSet::default(),
-            last_seen: 0,
-        }
-    }
-
-    fn add(&mut self, points: &[Point3<f32>], voxel_m: f32, frame: FrameIndex) {
-        for p in points {
-            let [x, y, z] = cell(p, voxel_m);
-            self.voxels.insert(key(x, y, z));
-        }
-        self.last_seen = frame.0;
-    }
-
-    /// Share of `points` in or next to a voxel of the footprint.
-    fn overlap(&self, points: &[Point3<f32>], voxel_m: f32) -> f32 {
-        let hits = points.iter().filter(|p| near(&self.voxels, cell(p, voxel_m))).count();
-        hits as f32 / points.len().max(1) as f32
-    }
 }
 
 /// The best of `overlaps` (highest, then lowest key) and whether a second one rivals it.
@@ -198,7 +154,51 @@ fn best<K: Copy + Ord>(overlaps: &mut [(K, f32)], cfg: &AssociationConfig) -> Op
     Some((k, rival))
 }
 
+/// What the association makes of one mask.
+enum Decision {
+    Fate(MaskFate),
+    ToCandidate(usize),
+    NewCandidate,
+}
+
+/// Least share of a second mask of one frame on an object for it to show the same object.
+const SPLIT_MASK_OVERLAP: f32 = 0.5;
+
 impl InstanceTracker {
+    /// Mask `m` decided against the objects (but `excluded`) and candidates, with its overlap
+    /// with the object it shows (0 otherwise).
+    fn decide(&self, m: &MaskEvidence, excluded: Option<ObjectId>, cfg: &AssociationConfig) -> (Decision, f32) {
+        let v = cfg.voxel_m;
+        if m.points.len() < cfg.min_points {
+            return (Decision::Fate(MaskFate::Held(HoldReason::TooFewPoints)), 0.0);
+        }
+        let mut overlaps: Vec<(ObjectId, f32)> = (self.objects.iter())
+            .filter(|&(&id, f)| f.class == m.class && Some(id) != excluded)
+            .map(|(&id, f)| (id, f.overlap(&m.points, v, Counted::Holding)))
+            .collect();
+        match best(&mut overlaps, cfg) {
+            Some((_, true)) => (Decision::Fate(MaskFate::Held(HoldReason::Ambiguous)), 0.0),
+            Some((id, false)) => (Decision::Fate(MaskFate::Object(id)), overlaps[0].1),
+            None if self.objects.iter().any(|(&id, f)| {
+                f.class != m.class
+                    && Some(id) != excluded
+                    && f.overlap(&m.points, v, Counted::Holding) >= cfg.confused_class_overlap
+            }) =>
+            {
+                (Decision::Fate(MaskFate::Held(HoldReason::ConfusedClass)), 0.0)
+            }
+            None => {
+                let mut overlaps: Vec<(usize, f32)> = (self.candidates.iter().enumerate())
+                    .filter(|(_, c)| c.footprint.class == m.class)
+                    .map(|(i, c)| (i, c.footprint.overlap(&m.points, v, Counted::Covered)))
+                    .collect();
+                let decision =
+                    best(&mut overlaps, cfg).map_or(Decision::NewCandidate, |(i, _)| Decision::ToCandidate(i));
+                (decision, 0.0)
+            }
+        }
+    }
+
     /// Number of objects made so far.
     pub fn object_count(&self) -> usize {
         self.objects.len()
@@ -220,60 +220,53 @@ impl InstanceTracker {
         self.candidates
             .retain(|c| frame.0.saturating_sub(c.footprint.last_seen) <= window);
         let v = cfg.voxel_m;
-        // Decide every mask against the state before this frame.
-        enum Decision {
-            Fate(MaskFate),
-            ToCandidate(usize),
-            NewCandidate,
+        // Decide every mask against the state before this frame. An object two masks of one
+        // frame go to keeps the one most of it shows; another stays with it only when most of
+        // that mask lies on it (the object split in two), else it is decided without it (a
+        // neighbour that touches it).
+        let mut decisions: Vec<(Decision, f32)> = masks.iter().map(|m| self.decide(m, None, cfg)).collect();
+        let mut by_object: BTreeMap<ObjectId, Vec<usize>> = BTreeMap::new();
+        for (i, (d, _)) in decisions.iter().enumerate() {
+            if let Decision::Fate(MaskFate::Object(id)) = d {
+                by_object.entry(*id).or_default().push(i);
+            }
         }
-        let decisions: Vec<Decision> = masks
-            .iter()
-            .map(|m| {
-                if m.points.len() < cfg.min_points {
-                    return Decision::Fate(MaskFate::Held(HoldReason::TooFewPoints));
+        for (id, mut shown) in by_object {
+            shown.sort_by(|&a, &b| decisions[b].1.total_cmp(&decisions[a].1).then(a.cmp(&b)));
+            for &i in &shown[1..] {
+                if decisions[i].1 < SPLIT_MASK_OVERLAP {
+                    decisions[i] = self.decide(&masks[i], Some(id), cfg);
                 }
-                let mut overlaps: Vec<(ObjectId, f32)> = self
-                    .objects
-                    .iter()
-                    .filter(|(_, f)| f.class == m.class)
-                    .map(|(&id, f)| (id, f.overlap(&m.points, v)))
-                    .collect();
-                match best(&mut overlaps, cfg) {
-                    Some((_, true)) => Decision::Fate(MaskFate::Held(HoldReason::Ambiguous)),
-                    Some((id, false)) => Decision::Fate(MaskFate::Object(id)),
-                    None if self
-                        .objects
-                        .values()
-                        .any(|f| f.class != m.class && f.overlap(&m.points, v) >= cfg.confused_class_overlap) =>
-                    {
-                        Decision::Fate(MaskFate::Held(HoldReason::ConfusedClass))
-                    }
-                    None => {
-                        let mut overlaps: Vec<(usize, f32)> = (self.candidates.iter().enumerate())
-                            .filter(|(_, c)| c.footprint.class == m.class)
-                            .map(|(i, c)| (i, c.footprint.overlap(&m.points, v)))
-                            .collect();
-                        best(&mut overlaps, cfg).map_or(Decision::NewCandidate, |(i, _)| Decision::ToCandidate(i))
-                    }
-                }
-            })
+            }
+        }
+        let decisions: Vec<Decision> = decisions.into_iter().map(|(d, _)| d).collect();
+        // A candidate two masks of one frame go to was two objects seen as one: each mask
+        // starts a candidate of its own instead.
+        let mut masks_per_candidate: BTreeMap<usize, usize> = BTreeMap::new();
+        for d in &decisions {
+            if let Decision::ToCandidate(i) = d {
+                *masks_per_candidate.entry(*i).or_default() += 1;
+            }
+        }
+        let contradicted: BTreeSet<usize> = (masks_per_candidate.into_iter())
+            .filter_map(|(i, n)| (n > 1).then_some(i))
             .collect();
-        // Apply: objects and candidates take their masks' points.
+        let keys: Vec<VoxelKeys> = masks.iter().map(|m| voxel_keys(&m.points, v)).collect();
+        // Apply: objects and candidates take their masks' voxels.
         let mut fates = BTreeMap::new();
+        let mut own: BTreeMap<ObjectId, VoxelKeys> = BTreeMap::new();
         let mut slots: Vec<(ObjectId, usize)> = Vec::new();
-        for (m, decision) in masks.iter().zip(decisions) {
+        for ((m, decision), keys) in masks.iter().zip(decisions).zip(&keys) {
             let slot = match decision {
                 Decision::Fate(fate) => {
-                    if let MaskFate::Object(id) = fate
-                        && let Some(footprint) = self.objects.get_mut(&id)
-                    {
-                        footprint.add(&m.points, v, frame);
+                    if let MaskFate::Object(id) = fate {
+                        own.entry(id).or_default().extend(keys);
                     }
                     fates.insert(m.local, fate);
                     continue;
                 }
-                Decision::ToCandidate(i) => i,
-                Decision::NewCandidate => {
+                Decision::ToCandidate(i) if !contradicted.contains(&i) => i,
+                Decision::ToCandidate(_) | Decision::NewCandidate => {
                     self.candidates.push(Candidate {
                         footprint: Footprint::new(m.class),
                         frames: 0,
@@ -281,8 +274,38 @@ impl InstanceTracker {
                     self.candidates.len() - 1
                 }
             };
-            self.candidates[slot].footprint.add(&m.points, v, frame);
+            self.candidates[slot].footprint.add(keys, frame);
             slots.push((m.local, slot));
+        }
+        // Objects count this frame's masks: theirs for them, the others' against them. An object
+        // grows only into voxels no other object holds and no candidate of its class covers (what
+        // a mask that merged it with a neighbour adds is the neighbour's).
+        let counts: Vec<(ObjectId, VoxelKeys, VoxelKeys)> = (own.iter())
+            .map(|(&id, own_keys)| {
+                let class = self.objects.get(&id).map(|f| f.class);
+                let claimed = |k: u64| {
+                    self.objects
+                        .iter()
+                        .any(|(&other, f)| other != id && f.covers(k, Counted::Holding))
+                        || (self.candidates.iter())
+                            .any(|c| Some(c.footprint.class) == class && c.footprint.covers(k, Counted::Covered))
+                };
+                let footprint = self.objects.get(&id);
+                let grown: VoxelKeys = (own_keys.iter().copied())
+                    .filter(|&k| footprint.is_some_and(|f| f.covers(k, Counted::Covered)) || !claimed(k))
+                    .collect();
+                let others: VoxelKeys = (masks.iter().zip(&keys))
+                    .filter(|(m, _)| fates.get(&m.local) != Some(&MaskFate::Object(id)))
+                    .flat_map(|(_, k)| k.iter().copied())
+                    .collect();
+                (id, grown, others)
+            })
+            .collect();
+        for (id, grown, others) in counts {
+            if let Some(footprint) = self.objects.get_mut(&id) {
+                footprint.add(&grown, frame);
+                footprint.count_against(&others, &own[&id]);
+            }
         }
         // Candidates seen in this frame count it; those seen in enough frames become objects.
         let seen: BTreeSet<usize> = slots.iter().map(|&(_, slot)| slot).collect();
@@ -305,7 +328,7 @@ impl InstanceTracker {
         let mut slot = 0;
         self.candidates.retain(|_| {
             slot += 1;
-            !promoted.contains_key(&(slot - 1))
+            !promoted.contains_key(&(slot - 1)) && !contradicted.contains(&(slot - 1))
         });
         fates
     }

@@ -146,6 +146,66 @@ fn two_touching_chairs_stay_two_objects_and_a_mask_spanning_both_is_held() {
     assert_eq!(tracker.object_count(), 2);
 }
 
+/// Masks of frame `t` for chairs `a` and `b` side by side: each alone, or one mask over both.
+fn side_by_side(t: u64, a: ([f32; 3], [f32; 3]), b: ([f32; 3], [f32; 3]), merged: bool) -> Vec<MaskEvidence> {
+    let j = 0.01 * (t % 2) as f32;
+    let (fa, fb) = (seen_face(a.0, a.1, j), seen_face(b.0, b.1, j));
+    match merged {
+        true => vec![mask(30, CHAIR, [fa, fb].concat())],
+        false => vec![mask(10, CHAIR, fa), mask(20, CHAIR, fb)],
+    }
+}
+
+#[test]
+fn a_neighbour_merged_into_an_objects_masks_still_becomes_an_object_of_its_own() {
+    let cfg = AssociationConfig::default();
+    let mut tracker = InstanceTracker::default();
+    let (a, b) = (chair_at(0.0), chair_at(0.55));
+    for t in 0..3 {
+        tracker.associate(FrameIndex(t), &side_by_side(t, a, b, false)[..1], &cfg);
+    }
+    let a_id = ObjectId(1);
+    assert_eq!(tracker.object_count(), 1);
+    // B is seen once alone, then twice in one mask with A (a segmenter's merges), then apart.
+    let fates = tracker.associate(FrameIndex(3), &side_by_side(3, a, b, false), &cfg);
+    assert_eq!(fates[&ObjectId(20)], MaskFate::Held(HoldReason::Candidate));
+    for t in 4..6 {
+        let fates = tracker.associate(FrameIndex(t), &side_by_side(t, a, b, true), &cfg);
+        assert_eq!(object_of(&fates, 30), Some(a_id), "mostly A: A takes it");
+    }
+    let mut seen = Vec::new();
+    for t in 6..10 {
+        let fates = tracker.associate(FrameIndex(t), &side_by_side(t, a, b, false), &cfg);
+        seen.push((object_of(&fates, 10), object_of(&fates, 20)));
+    }
+    let b_id = ObjectId(2);
+    assert_eq!(
+        seen[0],
+        (Some(a_id), None),
+        "B's mask is not A's: A did not grow into B"
+    );
+    assert_eq!(seen[1..], [(Some(a_id), Some(b_id)); 3], "B made after its third frame");
+}
+
+#[test]
+fn a_candidate_that_two_masks_of_one_frame_show_is_split_into_two() {
+    let cfg = AssociationConfig::default();
+    let mut tracker = InstanceTracker::default();
+    let (a, b) = (chair_at(0.0), chair_at(0.5));
+    // First seen as one mask over both chairs, then always apart.
+    tracker.associate(FrameIndex(0), &side_by_side(0, a, b, true), &cfg);
+    let mut seen = Vec::new();
+    for t in 1..5 {
+        let fates = tracker.associate(FrameIndex(t), &side_by_side(t, a, b, false), &cfg);
+        seen.push((object_of(&fates, 10), object_of(&fates, 20)));
+    }
+    assert_eq!(seen[..2], [(None, None); 2], "two new candidates, seen once and twice");
+    let (first_a, first_b) = seen[2];
+    assert!(first_a.is_some() && first_b.is_some() && first_a != first_b, "{seen:?}");
+    assert_eq!(seen[3], seen[2]);
+    assert_eq!(tracker.object_count(), 2);
+}
+
 #[test]
 fn a_split_object_keeps_one_id_and_another_class_is_not_taken() {
     let cfg = AssociationConfig::default();

@@ -9,6 +9,7 @@ pub mod frame_observation;
 pub mod hidden_space;
 pub mod instance_association;
 pub mod keyframes;
+pub mod mask_footprint;
 pub mod mask_trim;
 pub mod object_bounds;
 pub mod object_view;
