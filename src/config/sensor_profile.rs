@@ -1,21 +1,28 @@
 //! What a dataset's camera and masks are like, read off a few of its frames before the run: the
 //! depth's noise σ(d) and range ([`crate::sensor::depth_noise`]) and how far the masks' borders
-//! sit from their silhouettes ([`crate::sensor::mask_borders`]). From them the run takes a depth
-//! camera's settings ([`DepthImages::Camera`]) and a segmenter's ([`MaskBorders::Segmenter`]) when
-//! no flag says which, so a real sensor needs none.
+//! sit from their silhouettes ([`crate::sensor::mask_borders`]), and whether the instance ids
+//! name one object over the sequence ([`crate::sensor::instance_ids`]). From them the run takes a
+//! depth camera's settings ([`DepthImages::Camera`]), a segmenter's ([`MaskBorders::Segmenter`])
+//! and the association of per-frame masks ([`InstanceSource::PerFrame`]) when no flag says which,
+//! so a real sensor needs none.
 
 use serde::{Deserialize, Serialize};
 
 use crate::config::MapperConfig;
 use crate::dataset::FrameSource;
 use crate::objects::config::MaskBorders;
+use crate::objects::instance_association::InstanceSource;
 use crate::sensor::depth_noise::{DepthNoiseBin, DepthNoiseEstimator, DepthNoiseModel};
 use crate::sensor::depth_smoothing::DepthImages;
 use crate::sensor::frame::RgbdFrame;
+use crate::sensor::instance_ids::InstanceIdModel;
 use crate::sensor::mask_borders::{MaskBorderEstimator, MaskBorderModel};
 
 /// Frames read to probe a dataset: spread evenly over it.
 pub const PROBE_FRAMES: usize = 12;
+
+/// Every this many probed frames, the frame after it is read too, to compare the ids of a pair.
+pub const PAIR_EVERY: usize = 3;
 
 /// Depth whose σ at 2 m is larger than this is a camera's, metres: a tenth of the objects' cloud
 /// voxel (1 cm), below which the noise changes no voxel a point lands in. Exact depth stored in
@@ -43,6 +50,9 @@ pub struct SensorProfile {
     pub valid_depth_share: f32,
     /// The masks' borders (`None`: no border met a silhouette).
     pub mask_borders: Option<MaskBorderModel>,
+    /// The instance ids across pairs of consecutive frames (`None`: no pair was read).
+    #[serde(default)]
+    pub instance_ids: Option<InstanceIdModel>,
 }
 
 impl SensorProfile {
@@ -63,17 +73,31 @@ impl SensorProfile {
             depth_noise_bins: depth.bins(),
             valid_depth_share: depth.valid_share(),
             mask_borders: borders.estimate(),
+            instance_ids: None,
         }
     }
 
-    /// The profile of [`PROBE_FRAMES`] frames of `source` spread over it; a frame that cannot be
-    /// read is left out (the run reports it when it reaches it).
+    /// The profile of [`PROBE_FRAMES`] frames of `source` spread over it, with the frame after
+    /// every [`PAIR_EVERY`]th for the ids; a frame that cannot be read is left out (the run
+    /// reports it when it reaches it).
     pub fn probe(source: &dyn FrameSource) -> Self {
-        Self::of_frames(
-            probe_positions(source.len(), PROBE_FRAMES)
-                .into_iter()
-                .filter_map(|position| source.read_frame(position).ok()),
-        )
+        let positions = probe_positions(source.len(), PROBE_FRAMES);
+        let mut ids = InstanceIdModel::default();
+        let frames = positions.iter().enumerate().filter_map(|(k, &position)| {
+            let frame = source.read_frame(position).ok()?;
+            if k % PAIR_EVERY == 1
+                && position + 1 < source.len()
+                && let Ok(next) = source.read_frame(position + 1)
+            {
+                ids.add_pair(&frame, &next);
+            }
+            Some(frame)
+        });
+        let profile = Self::of_frames(frames);
+        Self {
+            instance_ids: (ids.pairs > 0).then_some(ids),
+            ..profile
+        }
     }
 
     /// A depth camera's images when σ(2 m) is above [`CAMERA_SIGMA_AT_2M_M`], else exact ones.
@@ -90,6 +114,17 @@ impl SensorProfile {
         match self.mask_borders {
             Some(m) if m.off_share > SEGMENTER_OFF_SHARE => MaskBorders::Segmenter,
             _ => MaskBorders::Exact,
+        }
+    }
+
+    /// Per-frame association when the ids do not name one object across a pair of frames, or
+    /// when the masks are a segmenter's (whose split halves and spurious masks carry ids of their
+    /// own, so its ids are trusted no further than its borders); else the ids as given.
+    pub fn instances(&self) -> InstanceSource {
+        let ids_consistent = self.instance_ids.is_none_or(|m| m.consistent());
+        match (ids_consistent, self.mask_borders()) {
+            (true, MaskBorders::Exact) => InstanceSource::Consistent,
+            _ => InstanceSource::PerFrame,
         }
     }
 }
@@ -116,6 +151,10 @@ pub struct SensorChoice {
     pub masks: MaskBorders,
     /// Who chose them.
     pub masks_chosen_by: ChosenBy,
+    /// Where object ids come from.
+    pub instances: InstanceSource,
+    /// Who chose it (a flag: `--instances`, or the config file's).
+    pub instances_chosen_by: ChosenBy,
     /// What the probe found.
     pub profile: Option<SensorProfile>,
 }
@@ -123,32 +162,39 @@ pub struct SensorChoice {
 impl SensorChoice {
     /// The flags' settings where given, the profile's elsewhere; `profile` is needed only when a
     /// flag is missing (`None` then reads as exact depth and masks).
-    pub fn resolve(depth: Option<DepthImages>, masks: Option<MaskBorders>, profile: Option<SensorProfile>) -> Self {
+    pub fn resolve(
+        depth: Option<DepthImages>,
+        masks: Option<MaskBorders>,
+        instances: Option<InstanceSource>,
+        profile: Option<SensorProfile>,
+    ) -> Self {
+        let by = |flag: bool| if flag { ChosenBy::Flag } else { ChosenBy::Probe };
         Self {
             depth: depth.unwrap_or_else(|| profile.as_ref().map_or(DepthImages::Exact, SensorProfile::depth_images)),
-            depth_chosen_by: if depth.is_some() {
-                ChosenBy::Flag
-            } else {
-                ChosenBy::Probe
-            },
+            depth_chosen_by: by(depth.is_some()),
             masks: masks.unwrap_or_else(|| profile.as_ref().map_or(MaskBorders::Exact, SensorProfile::mask_borders)),
-            masks_chosen_by: if masks.is_some() {
-                ChosenBy::Flag
-            } else {
-                ChosenBy::Probe
-            },
+            masks_chosen_by: by(masks.is_some()),
+            instances: instances.unwrap_or_else(|| {
+                profile
+                    .as_ref()
+                    .map_or(InstanceSource::Consistent, SensorProfile::instances)
+            }),
+            instances_chosen_by: by(instances.is_some()),
             profile,
         }
     }
 
-    /// `config` with these settings: a flag's always, the probe's only where it found a camera
-    /// or a segmenter (what the probe finds exact stays as the config file says).
+    /// `config` with these settings: a flag's always, the probe's only where it found a camera,
+    /// a segmenter or per-frame ids (what the probe finds exact stays as the config file says).
     pub fn apply(&self, mut config: MapperConfig) -> MapperConfig {
         if self.depth_chosen_by == ChosenBy::Flag || self.depth == DepthImages::Camera {
             config = config.with_depth_images(self.depth);
         }
         if self.masks_chosen_by == ChosenBy::Flag || self.masks == MaskBorders::Segmenter {
             config.objects = config.objects.clone().with_mask_borders(self.masks);
+        }
+        if self.instances_chosen_by == ChosenBy::Flag || self.instances == InstanceSource::PerFrame {
+            config.objects.association.instances = self.instances;
         }
         config
     }
@@ -163,11 +209,13 @@ impl SensorChoice {
             ChosenBy::Probe => "probe",
         };
         let mut out = format!(
-            "# Sensor\n\ndepth: **{:?}** ({}), masks: **{:?}** ({})\n",
+            "# Sensor\n\ndepth: **{:?}** ({}), masks: **{:?}** ({}), ids: **{:?}** ({})\n",
             self.depth,
             by(self.depth_chosen_by),
             self.masks,
-            by(self.masks_chosen_by)
+            by(self.masks_chosen_by),
+            self.instances,
+            by(self.instances_chosen_by)
         );
         let Some(p) = &self.profile else {
             return out;
@@ -195,6 +243,13 @@ impl SensorChoice {
                 100.0 * b.off_share,
                 b.samples,
                 b.p90_px
+            );
+        }
+        if let Some(ids) = p.instance_ids {
+            let _ = write!(
+                out,
+                "; ids in the same place in the next frame: {} of {} in {} pairs",
+                ids.agreeing, ids.ids, ids.pairs
             );
         }
         out.push_str(".\n\n| depth, m | σ, mm | patches |\n|---:|---:|---:|\n");
@@ -244,13 +299,14 @@ mod tests {
                 p90_px: 2,
                 samples: 1000,
             }),
+            instance_ids: None,
         }
     }
 
     #[test]
     fn flags_win_and_the_probe_decides_the_rest() {
         let noisy = profile(0.006, 0.6);
-        let choice = SensorChoice::resolve(None, Some(MaskBorders::Exact), Some(noisy.clone()));
+        let choice = SensorChoice::resolve(None, Some(MaskBorders::Exact), None, Some(noisy.clone()));
         assert_eq!(
             (choice.depth, choice.depth_chosen_by),
             (DepthImages::Camera, ChosenBy::Probe)
@@ -259,9 +315,9 @@ mod tests {
             (choice.masks, choice.masks_chosen_by),
             (MaskBorders::Exact, ChosenBy::Flag)
         );
-        let exact = SensorChoice::resolve(None, None, Some(profile(0.0003, 0.03)));
+        let exact = SensorChoice::resolve(None, None, None, Some(profile(0.0003, 0.03)));
         assert_eq!((exact.depth, exact.masks), (DepthImages::Exact, MaskBorders::Exact));
-        let unprobed = SensorChoice::resolve(None, None, None);
+        let unprobed = SensorChoice::resolve(None, None, None, None);
         assert_eq!(
             (unprobed.depth, unprobed.masks),
             (DepthImages::Exact, MaskBorders::Exact)
@@ -272,25 +328,35 @@ mod tests {
     fn the_probes_exact_leaves_a_config_files_settings_and_a_camera_takes_the_cameras() {
         let mut own = MapperConfig::default();
         own.objects.mask_border_px = 1;
-        let exact = SensorChoice::resolve(None, None, Some(profile(0.0003, 0.03)));
+        let exact = SensorChoice::resolve(None, None, None, Some(profile(0.0003, 0.03)));
         assert_eq!(
             exact.apply(own.clone()),
             own,
             "what the probe finds exact stays as the file says"
         );
-        let flagged = SensorChoice::resolve(Some(DepthImages::Exact), Some(MaskBorders::Exact), None);
+        let flagged = SensorChoice::resolve(
+            Some(DepthImages::Exact),
+            Some(MaskBorders::Exact),
+            Some(InstanceSource::Consistent),
+            None,
+        );
         assert_eq!(
             flagged.apply(own.clone()).objects.mask_border_px,
             0,
             "a flag always applies"
         );
-        let noisy = SensorChoice::resolve(None, None, Some(profile(0.006, 0.6)));
+        let noisy = SensorChoice::resolve(None, None, None, Some(profile(0.006, 0.6)));
         let expected = own.clone().with_depth_images(DepthImages::Camera);
-        let expected = MapperConfig {
+        let mut expected = MapperConfig {
             objects: expected.objects.clone().with_mask_borders(MaskBorders::Segmenter),
             ..expected
         };
-        assert_eq!(noisy.apply(own), expected, "as --depth camera --masks segmenter");
+        expected.objects.association.instances = InstanceSource::PerFrame;
+        assert_eq!(
+            noisy.apply(own),
+            expected,
+            "as --depth camera --masks segmenter --instances per-frame"
+        );
     }
 
     #[test]
@@ -299,17 +365,27 @@ mod tests {
         let profile = SensorProfile::probe(&exact);
         assert_eq!(profile.frames, PROBE_FRAMES);
         assert_eq!(
-            (profile.depth_images(), profile.mask_borders()),
-            (DepthImages::Exact, MaskBorders::Exact)
+            (profile.depth_images(), profile.mask_borders(), profile.instances()),
+            (DepthImages::Exact, MaskBorders::Exact, InstanceSource::Consistent)
         );
+        assert_eq!(profile.instance_ids.map(|m| m.pairs), Some(PROBE_FRAMES / PAIR_EVERY));
         let noisy = SyntheticScene::generate(1, Preset::Small)
             .expect("small scene")
             .with_sensor(SensorSettings::new(SensorModel::Kinect, InstanceIds::PerFrame));
         let profile = SensorProfile::probe(&noisy);
         assert_eq!(
-            (profile.depth_images(), profile.mask_borders()),
-            (DepthImages::Camera, MaskBorders::Segmenter),
+            (profile.depth_images(), profile.mask_borders(), profile.instances()),
+            (DepthImages::Camera, MaskBorders::Segmenter, InstanceSource::PerFrame),
             "{profile:?}"
+        );
+        let per_frame_exact = SyntheticScene::generate(1, Preset::Small)
+            .expect("small scene")
+            .with_sensor(SensorSettings::new(SensorModel::None, InstanceIds::PerFrame));
+        let profile = SensorProfile::probe(&per_frame_exact);
+        assert_eq!(
+            (profile.mask_borders(), profile.instances()),
+            (MaskBorders::Exact, InstanceSource::PerFrame),
+            "exact masks, ids numbered anew in every frame: {profile:?}"
         );
     }
 
@@ -321,9 +397,9 @@ mod tests {
             sigma_m: 0.0061,
             patches: 700,
         }];
-        let page = SensorChoice::resolve(None, Some(MaskBorders::Exact), Some(noisy)).markdown();
+        let page = SensorChoice::resolve(None, Some(MaskBorders::Exact), None, Some(noisy)).markdown();
         assert!(
-            page.contains("depth: **Camera** (probe), masks: **Exact** (flag)"),
+            page.contains("depth: **Camera** (probe), masks: **Exact** (flag), ids: **PerFrame** (probe)"),
             "{page}"
         );
         assert!(
@@ -331,7 +407,13 @@ mod tests {
             "{page}"
         );
         assert!(page.contains("| 2.12 | 6.10 | 700 |"), "{page}");
-        let flags = SensorChoice::resolve(Some(DepthImages::Exact), Some(MaskBorders::Exact), None).markdown();
+        let flags = SensorChoice::resolve(
+            Some(DepthImages::Exact),
+            Some(MaskBorders::Exact),
+            Some(InstanceSource::Consistent),
+            None,
+        )
+        .markdown();
         assert!(!flags.contains("Probe"), "{flags}");
     }
 

@@ -5,5 +5,6 @@ pub mod depth_noise;
 pub mod depth_smoothing;
 pub mod frame;
 pub mod image_ops;
+pub mod instance_ids;
 pub mod mask_borders;
 pub mod pixel_box;

@@ -90,7 +90,8 @@ pub struct RunArgs {
     pub fps: Option<f64>,
     /// Instance ids of the dataset: one per object over the sequence, or every frame its own
     /// (a 2D segmenter's); per-frame masks are associated into objects by class and 3D overlap
-    /// [default: the config's `objects.association.instances`, consistent]
+    /// [default: what a probe finds — per-frame when an id is not where it was in the next frame
+    /// or the masks are a segmenter's; else the config's `objects.association.instances`]
     #[arg(long, value_enum)]
     pub instances: Option<InstancesArg>,
     /// The masks' borders: exact (rendered, annotated) or a 2D segmenter's (a pixel or two off,
@@ -218,7 +219,11 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         )?;
     }
     let raw = plan.open_raw_source(&config)?;
-    let choice = sensor_choice(args.depth, args.masks, raw.as_ref());
+    // `--instances` (or a config file's per-frame) is a choice the probe leaves alone.
+    let instances = config.objects.association.instances;
+    let given =
+        args.instances.is_some() || instances == catmap::objects::instance_association::InstanceSource::PerFrame;
+    let choice = sensor_choice(args.depth, args.masks, given.then_some(instances), raw.as_ref());
     let config = choice.apply(config);
     plan.sensor = Some(choice);
     let dataset_config = &config.dataset;

@@ -5,13 +5,17 @@ use catmap::config::sensor_profile::{SensorChoice, SensorProfile};
 use catmap::objects::config::MaskBorders;
 use catmap::sensor::depth_smoothing::DepthImages;
 
+use catmap::objects::instance_association::InstanceSource;
+
 use crate::cli::run::{DepthArg, MasksArg};
 
-/// The depth and mask settings: `--depth` and `--masks` where given, else what a probe of the
-/// dataset's frames finds (logged).
+/// The depth, mask and id settings: `--depth` and `--masks` where given, `instances` where
+/// `--instances` was given (or a config file said per-frame), else what a probe of the dataset's
+/// frames finds (logged).
 pub fn sensor_choice(
     depth: Option<DepthArg>,
     masks: Option<MasksArg>,
+    instances: Option<InstanceSource>,
     source: &dyn catmap::dataset::FrameSource,
 ) -> SensorChoice {
     let depth = depth.map(|d| match d {
@@ -22,7 +26,7 @@ pub fn sensor_choice(
         MasksArg::Exact => MaskBorders::Exact,
         MasksArg::Segmenter => MaskBorders::Segmenter,
     });
-    let profile = (depth.is_none() || masks.is_none()).then(|| SensorProfile::probe(source));
+    let profile = (depth.is_none() || masks.is_none() || instances.is_none()).then(|| SensorProfile::probe(source));
     if let Some(profile) = &profile {
         let noise = profile.depth_noise;
         tracing::info!(
@@ -31,10 +35,11 @@ pub fn sensor_choice(
             range_m = noise.map(|n| n.range_m),
             valid_depth = profile.valid_depth_share,
             mask_borders_off = profile.mask_borders.map(|m| m.off_share),
+            ids_agreeing = profile.instance_ids.and_then(|m| m.agreeing_share()),
             "sensor probed"
         );
     }
-    let choice = SensorChoice::resolve(depth, masks, profile);
-    tracing::info!(depth = ?choice.depth, by = ?choice.depth_chosen_by, masks = ?choice.masks, masks_by = ?choice.masks_chosen_by, "sensor settings");
+    let choice = SensorChoice::resolve(depth, masks, instances, profile);
+    tracing::info!(depth = ?choice.depth, by = ?choice.depth_chosen_by, masks = ?choice.masks, masks_by = ?choice.masks_chosen_by, instances = ?choice.instances, instances_by = ?choice.instances_chosen_by, "sensor settings");
     choice
 }
