@@ -118,6 +118,17 @@ pub enum HoldReason {
     ConfusedClass,
 }
 
+/// What the association made of one frame's masks.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FrameAssociation {
+    /// Each mask's fate, by its id in the frame.
+    pub fates: BTreeMap<ObjectId, MaskFate>,
+    /// Per object, the voxels (`voxel_m`) its masks covered that another object holds or a
+    /// candidate of its class covers: a merged neighbour's surface, whose pixels are not the
+    /// object's.
+    pub foreign: BTreeMap<ObjectId, VoxelKeys>,
+}
+
 /// What became of a mask.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MaskFate {
@@ -216,6 +227,17 @@ impl InstanceTracker {
         masks: &[MaskEvidence],
         cfg: &AssociationConfig,
     ) -> BTreeMap<ObjectId, MaskFate> {
+        self.associate_frame(frame, masks, cfg).fates
+    }
+
+    /// [`InstanceTracker::associate`], with the voxels each object's masks covered that are
+    /// another's.
+    pub fn associate_frame(
+        &mut self,
+        frame: FrameIndex,
+        masks: &[MaskEvidence],
+        cfg: &AssociationConfig,
+    ) -> FrameAssociation {
         let window = cfg.candidate_window_frames;
         self.candidates
             .retain(|c| frame.0.saturating_sub(c.footprint.last_seen) <= window);
@@ -301,10 +323,15 @@ impl InstanceTracker {
                 (id, grown, others)
             })
             .collect();
+        let mut foreign = BTreeMap::new();
         for (id, grown, others) in counts {
             if let Some(footprint) = self.objects.get_mut(&id) {
                 footprint.add(&grown, frame);
                 footprint.count_against(&others, &own[&id]);
+            }
+            let theirs: VoxelKeys = own[&id].difference(&grown).copied().collect();
+            if !theirs.is_empty() {
+                foreign.insert(id, theirs);
             }
         }
         // Candidates seen in this frame count it; those seen in enough frames become objects.
@@ -330,7 +357,7 @@ impl InstanceTracker {
             slot += 1;
             !promoted.contains_key(&(slot - 1)) && !contradicted.contains(&(slot - 1))
         });
-        fates
+        FrameAssociation { fates, foreign }
     }
 }
 

@@ -3,6 +3,7 @@ use nalgebra::{Isometry3, Point3};
 use super::*;
 use crate::objects::config::ObjectConfig;
 use crate::objects::frame_observation::observe_objects;
+use crate::objects::mask_footprint::voxel_keys;
 use crate::objects::segment::{associate_frame, relabel_instances};
 use crate::sensor::frame::CameraIntrinsics;
 use crate::sensor::frame::{InstanceLabel, InstanceMask, RgbdFrame};
@@ -170,8 +171,20 @@ fn a_neighbour_merged_into_an_objects_masks_still_becomes_an_object_of_its_own()
     let fates = tracker.associate(FrameIndex(3), &side_by_side(3, a, b, false), &cfg);
     assert_eq!(fates[&ObjectId(20)], MaskFate::Held(HoldReason::Candidate));
     for t in 4..6 {
-        let fates = tracker.associate(FrameIndex(t), &side_by_side(t, a, b, true), &cfg);
-        assert_eq!(object_of(&fates, 30), Some(a_id), "mostly A: A takes it");
+        let merged = side_by_side(t, a, b, true);
+        let frame = tracker.associate_frame(FrameIndex(t), &merged, &cfg);
+        assert_eq!(object_of(&frame.fates, 30), Some(a_id), "mostly A: A takes it");
+        // The voxels of B's face the merged mask covered are B's, whose pixels become unsure.
+        let apart = side_by_side(t, a, b, false);
+        let (a_keys, b_keys) = (voxel_keys(&apart[0].points, 0.05), voxel_keys(&apart[1].points, 0.05));
+        let theirs = &frame.foreign[&a_id];
+        assert!(theirs.iter().all(|k| b_keys.contains(k) && !a_keys.contains(k)), "{t}");
+        assert!(
+            theirs.len() * 2 > b_keys.len(),
+            "most of B's face: {} of {}",
+            theirs.len(),
+            b_keys.len()
+        );
     }
     let mut seen = Vec::new();
     for t in 6..10 {

@@ -67,6 +67,12 @@ fn cell(p: &Point3<f32>, voxel_m: f32) -> [i64; 3] {
     [p.x, p.y, p.z].map(|v| (v / voxel_m).floor() as i64)
 }
 
+/// The key of the voxel `p` falls into.
+pub fn voxel_key(p: &Point3<f32>, voxel_m: f32) -> u64 {
+    let [x, y, z] = cell(p, voxel_m);
+    key(x, y, z)
+}
+
 /// The keys of the voxels `points` fall into.
 pub fn voxel_keys(points: &[Point3<f32>], voxel_m: f32) -> VoxelKeys {
     points

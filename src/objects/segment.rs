@@ -11,8 +11,9 @@ use crate::objects::border_votes::{LabelHistory, vote_on_band};
 use crate::objects::config::ObjectConfig;
 use crate::objects::frame_observation::{FrameObservation, observe_objects};
 use crate::objects::instance_association::{
-    AssociationConfig, InstanceSource, InstanceTracker, MaskEvidence, MaskFate,
+    AssociationConfig, FrameAssociation, InstanceSource, InstanceTracker, MaskEvidence, MaskFate,
 };
+use crate::objects::mask_footprint::voxel_key;
 use crate::objects::mask_trim::{
     BandInFront, border_band, spare_pixels_in_front, trim_bleeding_masks, with_band_unsure,
 };
@@ -46,8 +47,12 @@ pub fn associate_frame(
     observation: &FrameObservation,
     cfg: &ObjectConfig,
 ) -> (RgbdFrame, FrameObservation) {
-    let fates = associate_masks(tracker, frame, observation, cfg);
-    let relabelled = relabel_instances(frame, &fates);
+    let association = associate_masks(tracker, frame, observation, cfg);
+    let relabelled = unsure_where_foreign(
+        relabel_instances(frame, &association.fates),
+        &association,
+        cfg.association.voxel_m,
+    );
     let observation = observe_objects(&relabelled, cfg);
     (relabelled, observation)
 }
@@ -58,12 +63,32 @@ fn associate_masks(
     frame: &RgbdFrame,
     observation: &FrameObservation,
     cfg: &ObjectConfig,
-) -> BTreeMap<ObjectId, MaskFate> {
-    tracker.associate(
+) -> FrameAssociation {
+    tracker.associate_frame(
         frame.index,
         &mask_evidence(frame, observation, &cfg.association),
         &cfg.association,
     )
+}
+
+/// `relabelled` with the pixels of each object that lie in a voxel another object holds
+/// (`association.foreign`) made unsure: a merged neighbour's pixels.
+fn unsure_where_foreign(mut relabelled: RgbdFrame, association: &FrameAssociation, voxel_m: f32) -> RgbdFrame {
+    if association.foreign.is_empty() {
+        return relabelled;
+    }
+    for i in 0..relabelled.instances.len() {
+        let Some(id) = relabelled.instances.object_at(i) else {
+            continue;
+        };
+        let (Some(theirs), Some(p)) = (association.foreign.get(&id), relabelled.point_in_world(i)) else {
+            continue;
+        };
+        if theirs.contains(&voxel_key(&p, voxel_m)) {
+            relabelled.instances.set(i, InstanceLabel::Unsure);
+        }
+    }
+    relabelled
 }
 
 /// The segment stage's work on one frame: bleeding mask pixels trimmed (`bleed_radius_px`),
@@ -92,8 +117,9 @@ pub fn segment_frame(
         InstanceSource::PerFrame => {
             let bordered = band.as_ref().map(|band| with_band_unsure(base, band));
             let judged = bordered.as_ref().unwrap_or(base);
-            let fates = associate_masks(tracker, judged, &observe_objects(judged, cfg), cfg);
-            Some(relabel_instances(base, &fates))
+            let association = associate_masks(tracker, judged, &observe_objects(judged, cfg), cfg);
+            let relabelled = relabel_instances(base, &association.fates);
+            Some(unsure_where_foreign(relabelled, &association, cfg.association.voxel_m))
         }
     };
     let raw = labelled.as_ref().unwrap_or(base);
