@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The "Real sensors" table: each scene mapped clean (exact depth and masks, consistent ids) and
-# through each camera family with its segmenter and per-frame ids, with no --depth / --masks flag
-# (the probe decides), and each family's metrics against the clean run's.
+# through each camera family with its segmenter and per-frame ids, with no --depth / --masks /
+# --instances flag (the probe decides), and each family's metrics against the clean run's.
 #
 #   scripts/sensor_families.sh CATMAP WORK [SCENES] [FAMILIES] [-- extra `catmap run` arguments]
 #
@@ -29,9 +29,8 @@ for scene in $scenes; do
         "$catmap" synth --preset "$preset" --seed "$seed" --noise "$family" --ids per-frame --out "$dir" 2>/dev/null
       fi
     fi
-    ids=(); [ "$family" = clean ] || ids=(--instances per-frame)
     if [ ! -f "$work/runs/$name/metrics.json" ]; then
-      "$catmap" run --dataset "$dir" --seed 0 --no-recording "${ids[@]}" --out "$work/runs/$name" "$@" \
+      "$catmap" run --dataset "$dir" --seed 0 --no-recording --out "$work/runs/$name" "$@" \
         > "$work/logs/$name.txt" 2>&1 || { echo "$name: failed (log: $work/logs/$name.txt)"; continue; }
     fi
     rows+=("$name")
@@ -49,7 +48,7 @@ def load(name):
                 comp=m["mean"]["completion_cm"], cr5=m["mean"]["completion_ratio_5cm_pct"], seconds=s["total_seconds"],
                 choice=s.get("sensor", {}))
 runs = {n: load(n) for n in names}
-print("| scene | family | objects (truth) | missing | Acc. cm | Comp. cm | C.R. <5 cm % | Acc. / Comp. vs clean | C.R. vs clean (points) | probe: depth, masks | s |")
+print("| scene | family | objects (truth) | missing | Acc. cm | Comp. cm | C.R. <5 cm % | Acc. / Comp. vs clean | C.R. vs clean (points) | probe: depth, masks, ids | s |")
 print("|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|")
 for name, r in runs.items():
     preset, seed, family = name.split("_", 2)
@@ -57,6 +56,6 @@ for name, r in runs.items():
     ratio = f"{r['acc']/clean['acc']-1:+.0%} / {r['comp']/clean['comp']-1:+.0%}" if clean else "–"
     points = f"{r['cr5']-clean['cr5']:+.1f}" if clean else "–"
     ch = r["choice"]
-    probe = f"{ch.get('depth','?')}, {ch.get('masks','?')}"
+    probe = f"{ch.get('depth','?')}, {ch.get('masks','?')}, {ch.get('instances','?')}"
     print(f"| {preset} {seed} | {family} | {r['predicted']} ({r['truth']}) | {r['missing']} | {r['acc']:.2f} | {r['comp']:.2f} | {r['cr5']:.1f} | {ratio} | {points} | {probe} | {r['seconds']:.0f} |")
 PY

@@ -55,7 +55,9 @@ impl InstanceIdModel {
         let width = first.intrinsics.width as usize;
         // Per id: pixels the next frame sees, and those it gives the same id.
         let mut tally: BTreeMap<ObjectId, (usize, usize)> = BTreeMap::new();
-        for i in (0..first.instances.len()).filter(|i| (i / width) % PIXEL_STRIDE == 0 && i % PIXEL_STRIDE == 0) {
+        for i in (0..first.instances.len())
+            .filter(|i| (i / width).is_multiple_of(PIXEL_STRIDE) && i.is_multiple_of(PIXEL_STRIDE))
+        {
             let (Some(id), Some(world)) = (first.instances.object_at(i), first.point_in_world(i)) else {
                 continue;
             };

@@ -52,8 +52,8 @@ fn the_readmes_own_data_walk_through_maps_a_tum_layout_sequence_with_per_frame_m
         "{synth}"
     );
     assert!(
-        run.starts_with("catmap run") && run.contains("--instances per-frame"),
-        "{run}"
+        run.starts_with("catmap run") && !run.contains("--instances"),
+        "no flag: the probe finds the ids numbered anew in every frame: {run}"
     );
     let work = tempfile::tempdir().expect("temp dir");
     let work = work.path();
@@ -94,9 +94,17 @@ fn the_readmes_own_data_walk_through_maps_a_tum_layout_sequence_with_per_frame_m
     // settings `--depth camera --masks segmenter` would.
     let sensor = &summary["sensor"];
     assert_eq!(
-        (&sensor["depth"], &sensor["masks"]),
-        (&serde_json::json!("camera"), &serde_json::json!("segmenter")),
+        (&sensor["depth"], &sensor["masks"], &sensor["instances"]),
+        (
+            &serde_json::json!("camera"),
+            &serde_json::json!("segmenter"),
+            &serde_json::json!("per-frame")
+        ),
         "{sensor}"
+    );
+    assert_eq!(
+        sensor["profile"]["instance_ids"]["agreeing"], 0,
+        "no id labels the same surface in the next frame: {sensor}"
     );
     let objects = &summary["config"]["objects"];
     assert_eq!(
