@@ -190,10 +190,8 @@ impl InstanceTracker {
         match best(&mut overlaps, cfg) {
             Some((_, true)) => (Decision::Fate(MaskFate::Held(HoldReason::Ambiguous)), 0.0),
             Some((id, false)) => (Decision::Fate(MaskFate::Object(id)), overlaps[0].1),
-            None if self.objects.iter().any(|(&id, f)| {
-                f.class != m.class
-                    && Some(id) != excluded
-                    && f.overlap(&m.points, v, Counted::Holding) >= cfg.confused_class_overlap
+            None if self.objects.values().any(|f| {
+                f.class != m.class && f.overlap(&m.points, v, Counted::Holding) >= cfg.confused_class_overlap
             }) =>
             {
                 (Decision::Fate(MaskFate::Held(HoldReason::ConfusedClass)), 0.0)

@@ -15,7 +15,7 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use crate::ids::{ClassId, FrameIndex};
-use crate::objects::observed_cloud::VoxelKeyHasher;
+use crate::objects::observed_cloud::{VoxelKeyHasher, pack_voxel};
 
 /// Frames whose masks must cover a voxel before it holds for an object (module doc).
 pub const HOLDING_FRAMES: u16 = 2;
@@ -55,33 +55,18 @@ pub struct Footprint {
     pub last_seen: u64,
 }
 
-/// Packs voxel `(x, y, z)` (21 bits each) into a key.
-fn key(x: i64, y: i64, z: i64) -> u64 {
-    const MASK: i64 = (1 << 21) - 1;
-    const OFFSET: i64 = 1 << 20;
-    let c = |v: i64| ((v + OFFSET) & MASK) as u64;
-    (c(x) << 42) | (c(y) << 21) | c(z)
-}
-
 fn cell(p: &Point3<f32>, voxel_m: f32) -> [i64; 3] {
     [p.x, p.y, p.z].map(|v| (v / voxel_m).floor() as i64)
 }
 
 /// The key of the voxel `p` falls into.
 pub fn voxel_key(p: &Point3<f32>, voxel_m: f32) -> u64 {
-    let [x, y, z] = cell(p, voxel_m);
-    key(x, y, z)
+    pack_voxel(cell(p, voxel_m))
 }
 
 /// The keys of the voxels `points` fall into.
 pub fn voxel_keys(points: &[Point3<f32>], voxel_m: f32) -> VoxelKeys {
-    points
-        .iter()
-        .map(|p| {
-            let [x, y, z] = cell(p, voxel_m);
-            key(x, y, z)
-        })
-        .collect()
+    points.iter().map(|p| voxel_key(p, voxel_m)).collect()
 }
 
 impl Footprint {
@@ -124,7 +109,9 @@ impl Footprint {
     /// Share of `points` in or next to (one of the 26 around) a counted voxel.
     pub fn overlap(&self, points: &[Point3<f32>], voxel_m: f32, counted: Counted) -> f32 {
         let near = |[x, y, z]: [i64; 3]| {
-            (-1..=1).any(|dx| (-1..=1).any(|dy| (-1..=1).any(|dz| self.covers(key(x + dx, y + dy, z + dz), counted))))
+            (-1..=1).any(|dx| {
+                (-1..=1).any(|dy| (-1..=1).any(|dz| self.covers(pack_voxel([x + dx, y + dy, z + dz]), counted)))
+            })
         };
         let hits = points.iter().filter(|p| near(cell(p, voxel_m))).count();
         hits as f32 / points.len().max(1) as f32

@@ -64,10 +64,16 @@ pub enum VoxelVotes {
 /// Packs a voxel coordinate into one integer key (21 bits per axis, ±10 km at 1 cm).
 #[inline]
 fn voxel_key(p: &Point3<f32>, inv_voxel: f32) -> u64 {
+    pack_voxel([p.x, p.y, p.z].map(|x| floor_to_i64(x * inv_voxel)))
+}
+
+/// Packs integer voxel coordinates into one key (21 bits per axis).
+#[inline]
+pub(crate) fn pack_voxel([x, y, z]: [i64; 3]) -> u64 {
     const OFFSET: i64 = 1 << 20;
     const MASK: i64 = (1 << 21) - 1;
-    let c = |x: f32| ((floor_to_i64(x * inv_voxel) + OFFSET) & MASK) as u64;
-    (c(p.x) << 42) | (c(p.y) << 21) | c(p.z)
+    let c = |v: i64| ((v + OFFSET) & MASK) as u64;
+    (c(x) << 42) | (c(y) << 21) | c(z)
 }
 
 /// `x.floor() as i64` without a libm call (exact for finite `x` in the key's range).
