@@ -102,6 +102,8 @@ struct Associated {
     seconds_per_frame: f64,
     /// Per associated object, the first frame that shows it.
     first_frame: BTreeMap<ObjectId, usize>,
+    /// Objects found to be part of another.
+    merges: usize,
 }
 
 /// Every frame of `noisy` through the segment stage's own path, tallied against `exact`.
@@ -110,12 +112,21 @@ fn associate(noisy: &dyn FrameSource, exact: &dyn FrameSource, cfg: &ObjectConfi
     let mut history = LabelHistory::default();
     let mut tally = AssociationTally::default();
     let mut seconds = 0.0;
-    let mut first_frame = BTreeMap::new();
+    let mut first_frame: BTreeMap<ObjectId, usize> = BTreeMap::new();
+    let mut merges = 0;
     for i in 0..noisy.len() {
         let frame = noisy.read_frame(i)?;
         let start = Instant::now();
-        let (changed, _) = segment_frame(&frame, cfg, &mut tracker, &mut history);
+        let (changed, observation) = segment_frame(&frame, cfg, &mut tracker, &mut history);
         seconds += start.elapsed().as_secs_f64();
+        for merge in &observation.merges {
+            tally.merge(merge.kept, merge.absorbed);
+            let first = first_frame.remove(&merge.absorbed);
+            if let (Some(first), Some(kept)) = (first, first_frame.get_mut(&merge.kept)) {
+                *kept = (*kept).min(first);
+            }
+            merges += 1;
+        }
         let relabelled = changed.unwrap_or(frame);
         tally.add(&relabelled.instances, &exact.read_frame(i)?.instances);
         for p in 0..relabelled.instances.len() {
@@ -128,6 +139,7 @@ fn associate(noisy: &dyn FrameSource, exact: &dyn FrameSource, cfg: &ObjectConfi
         tally,
         seconds_per_frame: seconds / noisy.len().max(1) as f64,
         first_frame,
+        merges,
     })
 }
 
@@ -154,8 +166,9 @@ fn report(name: &str, run: &Associated, truths: Option<&[(ObjectId, String)]>, d
         )
     });
     println!(
-        "{name}: {} objects{against}, min purity {:.1} %, {:.2} ms per frame",
+        "{name}: {} objects{against}, {} merged, min purity {:.1} %, {:.2} ms per frame",
         objects.len(),
+        run.merges,
         100.0 * min_purity,
         1000.0 * run.seconds_per_frame
     );

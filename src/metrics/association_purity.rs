@@ -49,6 +49,16 @@ impl AssociationTally {
         }
     }
 
+    /// `absorbed` was found to be part of `kept`: its pixels are counted as `kept`'s.
+    pub fn merge(&mut self, kept: ObjectId, absorbed: ObjectId) {
+        for (truth, n) in self.counts.remove(&absorbed).unwrap_or_default() {
+            *self.counts.entry(kept).or_default().entry(truth).or_default() += n;
+        }
+        if let Some(n) = self.on_background.remove(&absorbed) {
+            *self.on_background.entry(kept).or_default() += n;
+        }
+    }
+
     /// Every associated object with its main ground-truth object and purity, in id order.
     pub fn objects(&self) -> Vec<AssociatedObject> {
         self.counts

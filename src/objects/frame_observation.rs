@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 
 use crate::ids::{ClassId, ObjectId};
 use crate::objects::config::ObjectConfig;
+use crate::objects::instance_association::ObjectMerge;
 use crate::sensor::frame::{InstanceLabel, RgbdFrame};
 use crate::sensor::pixel_box::PixelBox;
 
@@ -31,6 +32,8 @@ pub struct FrameObservation {
     pub ignored_small: Vec<ObjectId>,
     /// Pixel indices of the background, thinned by `background_pixel_stride` in each direction.
     pub background_pixels: Vec<u32>,
+    /// Objects the association found to be one in this frame (per-frame ids only).
+    pub merges: Vec<ObjectMerge>,
 }
 
 /// Groups the pixels of `frame` by object and computes boxes and class votes.
@@ -87,6 +90,7 @@ pub fn observe_objects(frame: &RgbdFrame, cfg: &ObjectConfig) -> FrameObservatio
         objects,
         ignored_small,
         background_pixels,
+        merges: Vec::new(),
     }
 }
 
@@ -155,6 +159,12 @@ impl DepthCoverage {
     pub fn add(&mut self, observation: &ObjectObservation, depth_m: &[f32]) {
         self.pixels += observation.pixels.len() as u64;
         self.with_depth += observation.pixels_with_depth(depth_m) as u64;
+    }
+
+    /// Adds the views of an object found to be part of this one.
+    pub fn absorb(&mut self, other: DepthCoverage) {
+        self.pixels += other.pixels;
+        self.with_depth += other.with_depth;
     }
 
     /// The share of pixels with a depth (`None` before any pixel).

@@ -30,6 +30,13 @@
 //!
 //! An object's footprint grows only into voxels no other object holds and no candidate of its
 //! class covers: what a mask merging it with a neighbour not yet made adds is the neighbour's.
+//!
+//! An object made twice (its ends seen in views that barely overlap as the camera panned, or a
+//! fragment of a mask the segmenter split) is **merged**: two objects of one class shown joined
+//! (one mask over both) in more frames than apart, and in at least two, become the one of lower
+//! id once the younger was first seen `candidate_window_frames` ago
+//! ([`crate::objects::pair_evidence`]); [`FrameAssociation::merges`] reports it and the map
+//! takes the other's sightings into it ([`crate::objects::object_merge`]).
 //! Held-back masks' pixels become unsure ([`crate::objects::segment::relabel_instances`]). Decisions
 //! depend only on the masks and the state, never on the masks' own ids or their order.
 
@@ -39,60 +46,10 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use crate::ids::{ClassId, FrameIndex, ObjectId};
+pub use crate::objects::association_config::{AssociationConfig, InstanceSource};
 use crate::objects::mask_footprint::{Counted, Footprint, VoxelKeys, voxel_keys};
-
-/// Where object ids come from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum InstanceSource {
-    /// The dataset's instance ids are one per object over the sequence (Replica, ScanNet).
-    #[default]
-    Consistent,
-    /// Every frame numbers its masks anew; masks are associated into objects (module doc).
-    PerFrame,
-}
-
-/// How masks are associated into objects (module doc).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct AssociationConfig {
-    /// `"consistent"` (the default) or `"per-frame"`.
-    pub instances: InstanceSource,
-    /// Edge of the voxels an object's points are kept in, metres.
-    pub voxel_m: f32,
-    /// Least share of a mask's points near an object for the object to take it.
-    pub min_overlap: f32,
-    /// A second object overlapping a mask by this share of the best overlap makes it ambiguous.
-    pub ambiguity_ratio: f32,
-    /// Frames a candidate must be seen in to become an object.
-    pub min_frames: u32,
-    /// A candidate not seen for this many frames is forgotten.
-    pub candidate_window_frames: u64,
-    /// A mask no object of its class takes, overlapping an object of another class by at least
-    /// this share, is that object under a confused class and is held back (module doc); above 1
-    /// turns the check off.
-    pub confused_class_overlap: f32,
-    /// Points drawn from each mask (evenly over its pixels with depth).
-    pub max_points_per_mask: usize,
-    /// A mask with fewer valid points is held back.
-    pub min_points: usize,
-}
-
-impl Default for AssociationConfig {
-    fn default() -> Self {
-        Self {
-            instances: InstanceSource::Consistent,
-            voxel_m: 0.05,
-            min_overlap: 0.3,
-            ambiguity_ratio: 0.5,
-            min_frames: 3,
-            candidate_window_frames: 30,
-            confused_class_overlap: 0.5,
-            max_points_per_mask: 400,
-            min_points: 20,
-        }
-    }
-}
+pub use crate::objects::pair_evidence::ObjectMerge;
+use crate::objects::pair_evidence::{MaskOwners, PairLedger, merge_joined, pairs_shown};
 
 /// One mask of a frame, as the association sees it.
 #[derive(Debug, Clone, PartialEq)]
@@ -127,6 +84,8 @@ pub struct FrameAssociation {
     /// candidate of its class covers: a merged neighbour's surface, whose pixels are not the
     /// object's.
     pub foreign: BTreeMap<ObjectId, VoxelKeys>,
+    /// Objects found to be one with another in this frame, in the order they were merged.
+    pub merges: Vec<ObjectMerge>,
 }
 
 /// What became of a mask.
@@ -150,24 +109,35 @@ struct Candidate {
 pub struct InstanceTracker {
     objects: BTreeMap<ObjectId, Footprint>,
     candidates: Vec<Candidate>,
+    /// Per pair of objects of one class, the frames that showed them apart and joined.
+    #[serde(default)]
+    pairs: PairLedger,
+    /// The id the next object gets (ids of merged objects are not given again).
+    #[serde(default)]
+    next_id: u32,
+    /// Every merge so far, in order.
+    #[serde(default)]
+    merges: Vec<ObjectMerge>,
 }
 
-/// The best of `overlaps` (highest, then lowest key) and whether a second one rivals it.
-fn best<K: Copy + Ord>(overlaps: &mut [(K, f32)], cfg: &AssociationConfig) -> Option<(K, bool)> {
+/// The best of `overlaps` (highest, then lowest key) and the second one if it rivals it.
+fn best<K: Copy + Ord>(overlaps: &mut [(K, f32)], cfg: &AssociationConfig) -> Option<(K, Option<K>)> {
     overlaps.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
     let (k, top) = *overlaps.first()?;
     if top < cfg.min_overlap {
         return None;
     }
-    let rival = overlaps
-        .get(1)
-        .is_some_and(|&(_, second)| second >= cfg.min_overlap && second >= cfg.ambiguity_ratio * top);
+    let rival = (overlaps.get(1))
+        .filter(|&&(_, second)| second >= cfg.min_overlap && second >= cfg.ambiguity_ratio * top)
+        .map(|&(r, _)| r);
     Some((k, rival))
 }
 
 /// What the association makes of one mask.
 enum Decision {
     Fate(MaskFate),
+    /// Held back: it spans these two objects of its class.
+    Ambiguous(ObjectId, ObjectId),
     ToCandidate(usize),
     NewCandidate,
 }
@@ -188,8 +158,8 @@ impl InstanceTracker {
             .map(|(&id, f)| (id, f.overlap(&m.points, v, Counted::Holding)))
             .collect();
         match best(&mut overlaps, cfg) {
-            Some((_, true)) => (Decision::Fate(MaskFate::Held(HoldReason::Ambiguous)), 0.0),
-            Some((id, false)) => (Decision::Fate(MaskFate::Object(id)), overlaps[0].1),
+            Some((id, Some(rival))) => (Decision::Ambiguous(id, rival), 0.0),
+            Some((id, None)) => (Decision::Fate(MaskFate::Object(id)), overlaps[0].1),
             None if self.objects.values().any(|f| {
                 f.class != m.class && f.overlap(&m.points, v, Counted::Holding) >= cfg.confused_class_overlap
             }) =>
@@ -211,6 +181,11 @@ impl InstanceTracker {
     /// Number of objects made so far.
     pub fn object_count(&self) -> usize {
         self.objects.len()
+    }
+
+    /// Every merge so far, in the order they were made.
+    pub fn merges(&self) -> &[ObjectMerge] {
+        &self.merges
     }
 
     /// Number of candidates waiting.
@@ -260,6 +235,16 @@ impl InstanceTracker {
             }
         }
         let decisions: Vec<Decision> = decisions.into_iter().map(|(d, _)| d).collect();
+        let keys: Vec<VoxelKeys> = masks.iter().map(|m| voxel_keys(&m.points, v)).collect();
+        let owners: Vec<MaskOwners> = (decisions.iter())
+            .map(|d| match *d {
+                Decision::Fate(MaskFate::Object(id)) => MaskOwners::Given(id),
+                Decision::Ambiguous(a, b) => MaskOwners::Between(a, b),
+                _ => MaskOwners::None,
+            })
+            .collect();
+        let classes: Vec<ClassId> = masks.iter().map(|m| m.class).collect();
+        let shown = pairs_shown(&classes, &keys, &owners, &self.objects);
         // A candidate two masks of one frame go to was two objects seen as one: each mask
         // starts a candidate of its own instead.
         let mut masks_per_candidate: BTreeMap<usize, usize> = BTreeMap::new();
@@ -271,7 +256,6 @@ impl InstanceTracker {
         let contradicted: BTreeSet<usize> = (masks_per_candidate.into_iter())
             .filter_map(|(i, n)| (n > 1).then_some(i))
             .collect();
-        let keys: Vec<VoxelKeys> = masks.iter().map(|m| voxel_keys(&m.points, v)).collect();
         // Apply: objects and candidates take their masks' voxels.
         let mut fates = BTreeMap::new();
         let mut own: BTreeMap<ObjectId, VoxelKeys> = BTreeMap::new();
@@ -283,6 +267,10 @@ impl InstanceTracker {
                         own.entry(id).or_default().extend(keys);
                     }
                     fates.insert(m.local, fate);
+                    continue;
+                }
+                Decision::Ambiguous(..) => {
+                    fates.insert(m.local, MaskFate::Held(HoldReason::Ambiguous));
                     continue;
                 }
                 Decision::ToCandidate(i) if !contradicted.contains(&i) => i,
@@ -339,7 +327,9 @@ impl InstanceTracker {
             let candidate = &mut self.candidates[slot];
             candidate.frames += 1;
             if candidate.frames >= cfg.min_frames {
-                let id = ObjectId(self.objects.keys().next_back().map_or(1, |last| last.0 + 1));
+                let last = self.objects.keys().next_back().map_or(0, |last| last.0);
+                let id = ObjectId(self.next_id.max(last + 1));
+                self.next_id = id.0 + 1;
                 self.objects.insert(id, candidate.footprint.clone());
                 promoted.insert(slot, id);
             }
@@ -355,10 +345,33 @@ impl InstanceTracker {
             slot += 1;
             !promoted.contains_key(&(slot - 1)) && !contradicted.contains(&(slot - 1))
         });
-        FrameAssociation { fates, foreign }
+        // Pairs shown joined more often than apart are one object: the lower id takes the other.
+        self.pairs.record(&shown);
+        let merges = merge_joined(&mut self.objects, &mut self.pairs, &shown, frame, window);
+        self.merges.extend(&merges);
+        for merge in &merges {
+            for fate in fates.values_mut() {
+                if *fate == MaskFate::Object(merge.absorbed) {
+                    *fate = MaskFate::Object(merge.kept);
+                }
+            }
+            let theirs = foreign.remove(&merge.absorbed).unwrap_or_default();
+            let kept = foreign.entry(merge.kept).or_default();
+            kept.extend(theirs);
+            let footprint = &self.objects[&merge.kept];
+            kept.retain(|&k| !footprint.covers(k, Counted::Covered));
+            if kept.is_empty() {
+                foreign.remove(&merge.kept);
+            }
+        }
+        FrameAssociation { fates, foreign, merges }
     }
 }
 
 #[cfg(test)]
 #[path = "instance_association_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "instance_merge_tests.rs"]
+mod merge_tests;

@@ -8,12 +8,12 @@ use crate::objects::segment::{associate_frame, relabel_instances};
 use crate::sensor::frame::CameraIntrinsics;
 use crate::sensor::frame::{InstanceLabel, InstanceMask, RgbdFrame};
 
-const CHAIR: ClassId = ClassId(20);
+pub(super) const CHAIR: ClassId = ClassId(20);
 const TABLE: ClassId = ClassId(80);
 
 /// Points 2 cm apart on the faces of the box `[lo, hi]` that face −y (what a camera at −y sees),
 /// shifted by `jitter_m` along x (a frame's view differs a little).
-fn seen_face(lo: [f32; 3], hi: [f32; 3], jitter_m: f32) -> Vec<Point3<f32>> {
+pub(super) fn seen_face(lo: [f32; 3], hi: [f32; 3], jitter_m: f32) -> Vec<Point3<f32>> {
     let mut points = Vec::new();
     let steps = |a: f32, b: f32| ((b - a) / 0.02).round() as usize;
     for i in 0..=steps(lo[0], hi[0]) {
@@ -28,7 +28,7 @@ fn seen_face(lo: [f32; 3], hi: [f32; 3], jitter_m: f32) -> Vec<Point3<f32>> {
     points
 }
 
-fn mask(local: u32, class: ClassId, points: Vec<Point3<f32>>) -> MaskEvidence {
+pub(super) fn mask(local: u32, class: ClassId, points: Vec<Point3<f32>>) -> MaskEvidence {
     MaskEvidence {
         local: ObjectId(local),
         class,
@@ -36,7 +36,7 @@ fn mask(local: u32, class: ClassId, points: Vec<Point3<f32>>) -> MaskEvidence {
     }
 }
 
-fn chair_at(x: f32) -> ([f32; 3], [f32; 3]) {
+pub(super) fn chair_at(x: f32) -> ([f32; 3], [f32; 3]) {
     ([x - 0.25, 0.0, 0.0], [x + 0.25, 0.5, 0.9])
 }
 
@@ -51,7 +51,7 @@ fn three_objects(t: u64, ids: [u32; 3]) -> Vec<MaskEvidence> {
     ]
 }
 
-fn object_of(fates: &BTreeMap<ObjectId, MaskFate>, local: u32) -> Option<ObjectId> {
+pub(super) fn object_of(fates: &BTreeMap<ObjectId, MaskFate>, local: u32) -> Option<ObjectId> {
     match fates.get(&ObjectId(local)) {
         Some(MaskFate::Object(id)) => Some(*id),
         _ => None,
@@ -148,7 +148,12 @@ fn two_touching_chairs_stay_two_objects_and_a_mask_spanning_both_is_held() {
 }
 
 /// Masks of frame `t` for chairs `a` and `b` side by side: each alone, or one mask over both.
-fn side_by_side(t: u64, a: ([f32; 3], [f32; 3]), b: ([f32; 3], [f32; 3]), merged: bool) -> Vec<MaskEvidence> {
+pub(super) fn side_by_side(
+    t: u64,
+    a: ([f32; 3], [f32; 3]),
+    b: ([f32; 3], [f32; 3]),
+    merged: bool,
+) -> Vec<MaskEvidence> {
     let j = 0.01 * (t % 2) as f32;
     let (fa, fb) = (seen_face(a.0, a.1, j), seen_face(b.0, b.1, j));
     match merged {

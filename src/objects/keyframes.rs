@@ -135,6 +135,43 @@ impl<T> KeyframeWindow<T> {
         candidates[rng.random_range(0..candidates.len())]
     }
 
+    /// Takes in the window of an object found to be part of this one: the slots of both, in
+    /// frame order (a frame in both windows keeps this window's slot, with `other`'s data given
+    /// to `combine`); beyond `capacity` the two newest are kept and the others thinned evenly.
+    /// The two newest become the recent keyframes, and the visible frames add up.
+    pub fn absorb(&mut self, other: Self, capacity: usize, rng: &mut impl Rng, combine: impl Fn(&mut T, T)) {
+        let mut slots = std::mem::take(&mut self.slots);
+        for slot in other.slots {
+            match slots.iter_mut().find(|s| s.frame == slot.frame) {
+                Some(mine) => combine(&mut mine.data, slot.data),
+                None => slots.push(slot),
+            }
+        }
+        slots.sort_by_key(|s| s.frame);
+        if slots.len() > capacity.max(3) {
+            let (older, newest) = (slots.len() - 2, capacity.max(3) - 2);
+            let keep: Vec<usize> = (0..newest).map(|k| k * older / newest).collect();
+            let mut i = 0;
+            slots.retain(|_| {
+                i += 1;
+                i > older || keep.contains(&(i - 1))
+            });
+        }
+        let n = slots.len();
+        self.slots = slots;
+        self.recent = (n.saturating_sub(2)..n).collect();
+        self.visible_count += other.visible_count;
+        self.live = match n < capacity {
+            true => n.saturating_sub(1),
+            false => self.draw_replaceable_slot(rng),
+        };
+    }
+
+    /// Every slot's data, to change in place.
+    pub fn data_mut(&mut self) -> impl Iterator<Item = &mut T> {
+        self.slots.iter_mut().map(|s| &mut s.data)
+    }
+
     /// All slots, in slot order.
     pub fn slots(&self) -> &[KeyframeSlot<T>] {
         &self.slots

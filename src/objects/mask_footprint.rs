@@ -51,8 +51,15 @@ pub struct Footprint {
     /// The majority class of the masks that made it.
     pub class: ClassId,
     voxels: HashMap<u64, VoxelEvidence, BuildHasherDefault<VoxelKeyHasher>>,
+    /// The first frame a mask was added.
+    #[serde(default)]
+    pub first_seen: u64,
     /// The last frame a mask was added.
     pub last_seen: u64,
+    /// Frames whose masks were added, and the voxels they added in all (what one sighting
+    /// covers, on average).
+    #[serde(default)]
+    sightings: (u32, u64),
 }
 
 fn cell(p: &Point3<f32>, voxel_m: f32) -> [i64; 3] {
@@ -75,7 +82,9 @@ impl Footprint {
         Self {
             class,
             voxels: HashMap::default(),
+            first_seen: 0,
             last_seen: 0,
+            sightings: (0, 0),
         }
     }
 
@@ -85,7 +94,36 @@ impl Footprint {
             let e = self.voxels.entry(k).or_default();
             e.own = e.own.saturating_add(1);
         }
+        if self.sightings.0 == 0 {
+            self.first_seen = frame.0;
+        }
         self.last_seen = frame.0;
+        self.sightings = (self.sightings.0 + 1, self.sightings.1 + keys.len() as u64);
+    }
+
+    /// The voxels one sighting of the object adds, on average (0 before any).
+    pub fn voxels_per_sighting(&self) -> f32 {
+        self.sightings.1 as f32 / self.sightings.0.max(1) as f32
+    }
+
+    /// How many of `keys` hold for the object.
+    pub fn holding_among(&self, keys: &VoxelKeys) -> usize {
+        keys.iter().filter(|&&k| self.covers(k, Counted::Holding)).count()
+    }
+
+    /// Takes in `other`, a footprint of the same object: every voxel's counts summed.
+    pub fn absorb(&mut self, other: &Footprint) {
+        for (&k, e) in &other.voxels {
+            let mine = self.voxels.entry(k).or_default();
+            mine.own = mine.own.saturating_add(e.own);
+            mine.others = mine.others.saturating_add(e.others);
+        }
+        self.first_seen = self.first_seen.min(other.first_seen);
+        self.last_seen = self.last_seen.max(other.last_seen);
+        self.sightings = (
+            self.sightings.0 + other.sightings.0,
+            self.sightings.1 + other.sightings.1,
+        );
     }
 
     /// Counts against the object the voxels of `others` (masks of a frame that showed the object

@@ -182,6 +182,34 @@ impl ObjectView {
             .min_by(f32::total_cmp)
     }
 
+    /// Makes the pixels of other objects unsure: what one of two objects found to be one saw as
+    /// the other's is its own surface (a frame that showed both apart), and an unsure pixel teaches
+    /// only the free space before its return, true whoever's surface it is.
+    pub fn others_unsure(&mut self) {
+        for state in &mut self.states {
+            if *state == PixelState::OtherObject {
+                *state = PixelState::Unsure;
+            }
+        }
+    }
+
+    /// Takes in the view of the same frame kept by an object found to be part of this one: its
+    /// pixels that showed that object, inside this crop, show this one.
+    pub fn absorb(&mut self, other: &ObjectView) {
+        for (j, state) in other.states.iter().enumerate() {
+            let width = other.region.width();
+            let (u, v) = (
+                other.region.u_min + j as u32 % width,
+                other.region.v_min + j as u32 / width,
+            );
+            if *state == PixelState::ThisObject
+                && let Some(i) = self.index_of(u, v)
+            {
+                self.states[i] = PixelState::ThisObject;
+            }
+        }
+    }
+
     /// Bytes held by the crop's pixel arrays.
     pub fn byte_size(&self) -> usize {
         self.rgb.len() * 3 + self.depth_m.len() * 4 + self.states.len()

@@ -231,6 +231,17 @@ impl ObservedCloud {
         added
     }
 
+    /// Takes in the cloud of an object found to be part of this one (on the same grid): points
+    /// and view votes add up voxel by voxel.
+    pub fn absorb(&mut self, other: &ObservedCloud) {
+        for (&key, theirs) in &other.voxels {
+            self.add_to_voxel(key, theirs.sum, theirs.count);
+            let votes = &mut self.voxels.get_mut(&key).expect("just added").votes;
+            votes.own += theirs.votes.own;
+            votes.elsewhere += theirs.votes.elsewhere;
+        }
+    }
+
     /// Number of occupied voxels (= points of [`ObservedCloud::points`]).
     pub fn len(&self) -> usize {
         self.voxels.len()

@@ -53,7 +53,10 @@ pub fn associate_frame(
         &association,
         cfg.association.voxel_m,
     );
-    let observation = observe_objects(&relabelled, cfg);
+    let observation = FrameObservation {
+        merges: association.merges,
+        ..observe_objects(&relabelled, cfg)
+    };
     (relabelled, observation)
 }
 
@@ -95,7 +98,8 @@ fn unsure_where_foreign(mut relabelled: RgbdFrame, association: &FrameAssociatio
 /// masks' borders made unsure (`mask_border_px`) or, with `border_votes.frames`, decided by the
 /// last frames' labels kept in `history` ([`crate::objects::border_votes`]), the pixels grouped by
 /// object, and, with per-frame ids, the masks associated into objects by `tracker` (from the
-/// masks without their band). Returns the frame when it changed, and its observation.
+/// masks without their band). Returns the frame when it changed, and its observation (with the
+/// objects the association merged in it).
 pub fn segment_frame(
     frame: &RgbdFrame,
     cfg: &ObjectConfig,
@@ -112,14 +116,18 @@ pub fn segment_frame(
     });
     // With per-frame ids, the masks without their band are associated, and the frame before the
     // band relabelled.
-    let labelled = match cfg.association.instances {
-        InstanceSource::Consistent => None,
+    let (labelled, merges) = match cfg.association.instances {
+        InstanceSource::Consistent => (None, Vec::new()),
         InstanceSource::PerFrame => {
             let bordered = band.as_ref().map(|band| with_band_unsure(base, band));
             let judged = bordered.as_ref().unwrap_or(base);
             let association = associate_masks(tracker, judged, &observe_objects(judged, cfg), cfg);
             let relabelled = relabel_instances(base, &association.fates);
-            Some(unsure_where_foreign(relabelled, &association, cfg.association.voxel_m))
+            let voxel_m = cfg.association.voxel_m;
+            (
+                Some(unsure_where_foreign(relabelled, &association, voxel_m)),
+                association.merges,
+            )
         }
     };
     let raw = labelled.as_ref().unwrap_or(base);
@@ -131,7 +139,10 @@ pub fn segment_frame(
         history.push(raw, &raw.instances, cfg.border_votes.frames);
     }
     let changed = decided.or(labelled).or(trimmed);
-    let observation = observe_objects(changed.as_ref().unwrap_or(frame), cfg);
+    let observation = FrameObservation {
+        merges,
+        ..observe_objects(changed.as_ref().unwrap_or(frame), cfg)
+    };
     (changed, observation)
 }
 

@@ -92,7 +92,8 @@ pub(crate) struct MapperState {
     objects: Vec<ObjectState>,
     categories: Vec<CategoryState>,
     /// Owner of each object field, in batch order, and the fields' shapes.
-    object_fields: Vec<(ObjectId, OccupancyFieldHeader)>,
+    /// Object fields by batch index, with their owner (none: its object was merged into another).
+    object_fields: Vec<(Option<ObjectId>, OccupancyFieldHeader)>,
     background_field: Option<OccupancyFieldHeader>,
     /// Category fields: shape and member objects in code order.
     category_fields: Vec<(CategoryFieldHeader, Vec<ObjectId>)>,
@@ -151,7 +152,12 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
     let fields = world.resource::<Fields>();
     let mut object_fields = Vec::new();
     for (index, (field, owner)) in fields.objects.fields().iter().zip(&fields.object_owners).enumerate() {
-        let id = id_of(owner).ok_or_else(|| CatmapError::Degenerate(format!("object field {index} has no owner")))?;
+        let id = match owner {
+            Some(owner) => Some(
+                id_of(owner).ok_or_else(|| CatmapError::Degenerate(format!("object field {index} has no owner")))?,
+            ),
+            None => None,
+        };
         object_fields.push((
             id,
             store_occupancy_field(field, &format!("objects/{index}"), &mut tensors),
@@ -345,7 +351,7 @@ pub(crate) fn restore(
     for (i, (id, header)) in state.object_fields.iter().enumerate() {
         let field = load_occupancy_field(header, &format!("objects/{i}"), &mut tensors, file)?;
         fields.objects.push(field);
-        fields.object_owners.push(entity_of(id)?);
+        fields.object_owners.push(id.as_ref().map(entity_of).transpose()?);
     }
     if let Some(header) = &state.background_field {
         fields

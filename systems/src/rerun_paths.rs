@@ -37,6 +37,9 @@ pub const WALL_CLOCK_TIMELINE: &str = "time";
 /// The category phase's timeline: category steps run.
 pub const CATEGORY_TIMELINE: &str = "category_step";
 
+/// A text line per object merged into another (per-frame ids).
+pub const MERGES: &str = "objects/merges";
+
 /// Root of every object's entities.
 pub const OBJECTS: &str = "world/objects";
 
@@ -196,6 +199,7 @@ mod tests {
             STREAM_RATE,
             STREAM_DROPPED,
             SENSOR,
+            MERGES,
         ]
         .iter()
         .map(|p| (*p).to_owned())

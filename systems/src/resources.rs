@@ -171,8 +171,9 @@ impl Drop for StageTimer<'_> {
 pub struct Fields {
     /// Object fields (H = 32), in creation order.
     pub objects: catmap::field::FieldBatch,
-    /// The entity owning each object field, by batch index.
-    pub object_owners: Vec<Entity>,
+    /// The entity owning each object field, by batch index (none once its object was merged
+    /// into another: the field stays, untrained, so that indices hold).
+    pub object_owners: Vec<Option<Entity>>,
     /// The background field (H = 128), once the background has keyframes.
     pub background: catmap::field::FieldBatch,
     /// The background entity, once its field exists.

@@ -18,9 +18,10 @@ use crate::stages::log_camera::log_camera_frames;
 use crate::stages::log_categories::log_category_training;
 use crate::stages::log_rerun::{
     log_field_losses, log_field_meshes, log_final_meshes, log_instance_legend, log_memberships, log_object_boxes,
-    log_object_clouds,
+    log_object_clouds, log_object_merges,
 };
 use crate::stages::log_stream::log_live_stream;
+use crate::stages::merge::merge_objects;
 use crate::stages::meshes::{extract_preview_meshes, final_meshes, warn_missing_meshes};
 use crate::stages::register::register_categories;
 use crate::stages::segment::observe_frames;
@@ -39,7 +40,7 @@ pub enum MapperSystems {
     Segment,
     /// Objects appear and take in their views.
     Track,
-    /// Observed clouds and oriented boxes grow.
+    /// Observed clouds grow, objects found to be one merge, oriented boxes follow.
     Map,
     /// Category membership follows object classes.
     Categorize,
@@ -118,7 +119,7 @@ pub fn build_schedule() -> Schedule {
         (spawn_new_objects, record_object_views, record_background_views)
             .chain()
             .in_set(MapperSystems::Track),
-        (accumulate_clouds, refresh_object_bounds)
+        (accumulate_clouds, merge_objects, refresh_object_bounds)
             .chain()
             .in_set(MapperSystems::Map),
         update_categories.in_set(MapperSystems::Categorize),
@@ -142,6 +143,7 @@ pub fn build_schedule() -> Schedule {
             (
                 log_camera_frames,
                 log_instance_legend,
+                log_object_merges,
                 log_object_clouds,
                 log_object_boxes,
             )

@@ -11,7 +11,7 @@ use crate::components::{
     Background, Category, ClassVotes, Keyframes, LatestBox, Object, ObjectBounds, ObjectClass, ObjectCloud,
     ObjectDepthCoverage, VisibleFrames,
 };
-use crate::resources::{DatasetClasses, StreamProgress};
+use crate::resources::{Association, DatasetClasses, StreamProgress};
 
 /// One object as the mapper knows it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -80,6 +80,8 @@ pub struct MapSnapshot {
     pub background: Option<BackgroundSnapshot>,
     /// Categories sorted by class.
     pub categories: Vec<CategorySnapshot>,
+    /// Objects found to be part of another (per-frame ids), in the order they were merged.
+    pub merges: Vec<catmap::objects::instance_association::ObjectMerge>,
 }
 
 impl MapSnapshot {
@@ -143,6 +145,7 @@ impl MapSnapshot {
             objects,
             background,
             categories,
+            merges: world.resource::<Association>().0.merges().to_vec(),
         }
     }
 

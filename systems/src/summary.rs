@@ -72,6 +72,11 @@ pub struct RunSummary {
     pub objects_per_class: BTreeMap<String, usize>,
     /// Every object.
     pub objects: Vec<ObjectRow>,
+    /// Objects found to be part of another with per-frame ids (one object made twice: its ends
+    /// seen apart as the camera panned, or a fragment of a split mask), in the order they were
+    /// merged: the frame, the object that kept its id and the one taken into it.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub merged_objects: Vec<catmap::objects::instance_association::ObjectMerge>,
     /// Seconds per stage (`read` is the reader thread's decode time, overlapping the others).
     pub stage_seconds: BTreeMap<String, f64>,
     /// Wall-clock seconds of the whole run.
@@ -188,6 +193,7 @@ impl RunSummary {
             frames_skipped: map.frames_skipped,
             objects_per_class,
             objects,
+            merged_objects: map.merges.clone(),
             stage_seconds,
             total_seconds,
             frames_per_second: map.frames_ingested as f64 / total_seconds.max(1e-9),
@@ -227,6 +233,12 @@ impl RunSummary {
             let _ = writeln!(out, "| {class} | {n} |");
         }
         let _ = writeln!(out, "| **all** | {} |", self.objects.len());
+        if !self.merged_objects.is_empty() {
+            let merges: Vec<String> = (self.merged_objects.iter())
+                .map(|m| format!("{} into {} (frame {})", m.absorbed, m.kept, m.frame))
+                .collect();
+            let _ = writeln!(out, "\nobjects merged: {}", merges.join(", "));
+        }
         if let Some(training) = &self.training {
             training.write_table(&mut out);
         }
@@ -279,6 +291,7 @@ mod tests {
             objects: Vec::new(),
             background: None,
             categories: Vec::new(),
+            merges: Vec::new(),
         };
         let mut summary = RunSummary::new("scene".to_owned(), &map, BTreeMap::new(), 1.0);
         summary.objects = rows;

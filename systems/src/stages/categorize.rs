@@ -6,16 +6,19 @@ use catmap::{ClassId, ObjectId};
 use crate::components::{Category, Object, ObjectClass};
 use crate::resources::CategoryIndex;
 
-/// Rebuilds category membership when an object appears or its majority class changes; spawns a
+/// Rebuilds category membership when an object appears, its majority class changes or it was
+/// merged into another (its entity gone); spawns a
 /// category entity for each class seen for the first time.
 pub fn update_categories(
     changed: Query<(), Changed<ObjectClass>>,
+    mut merged: RemovedComponents<Object>,
     objects: Query<(&Object, &ObjectClass)>,
     mut categories: Query<&mut Category>,
     mut index: ResMut<CategoryIndex>,
     mut commands: Commands,
 ) {
-    if changed.is_empty() {
+    let merged = merged.read().count() > 0;
+    if changed.is_empty() && !merged {
         return;
     }
     let mut members: std::collections::BTreeMap<ClassId, Vec<ObjectId>> = std::collections::BTreeMap::new();

@@ -10,6 +10,7 @@
 //!   subcategory, labelled "chair 3 · sub 0" (+ " · rep" for the representative);
 //!   `world/objects/{id}/reliability` — the uncertainty sphere's points coloured by g(u);
 //! - `world/background/mesh` — the same for the background field;
+//! - `objects/merges` — a text line per object merged into another (its entities are cleared);
 //! - `training/{loss,steps,carving_share}/{objects/{id},background}` — each field's training
 //!   (scalars, once per tick).
 
@@ -22,7 +23,7 @@ use catmap::training::MeshSource;
 use catmap::{ClassId, ObjectId};
 
 use crate::components::{
-    FieldLoss, FieldMesh, Membership, Object, ObjectBounds, ObjectClass, ObjectCloud, Reliability,
+    FieldLoss, FieldMesh, FrameObservations, Membership, Object, ObjectBounds, ObjectClass, ObjectCloud, Reliability,
 };
 use crate::recording::{Rerun, warn_on_error};
 use crate::rerun_paths::{self as paths, OwnerEntity};
@@ -188,6 +189,26 @@ pub fn log_final_meshes(
         let membership = memberships.get(owned.entity).ok();
         let mesh = owned.mesh.clustered(cell);
         log_owner_mesh(&rerun, owned.object, &mesh, owned.source, membership);
+    }
+}
+
+/// Clears the entities of every object merged into another this tick (`world/objects/{id}`
+/// and below) and notes the merge in the stream's text log.
+pub fn log_object_merges(rerun: Res<Rerun>, frames: Query<&FrameObservations, Added<FrameObservations>>) {
+    for merge in frames.iter().flat_map(|f| &f.0.merges) {
+        let path = paths::object(merge.absorbed);
+        warn_on_error(rerun.0.log(path.as_str(), &rerun::Clear::recursive()), &path);
+        let note = format!(
+            "object {} merged into object {} (frame {})",
+            merge.absorbed, merge.kept, merge.frame
+        );
+        warn_on_error(
+            rerun.0.log(
+                paths::MERGES,
+                &rerun::TextLog::new(note).with_level(rerun::TextLogLevel::INFO),
+            ),
+            paths::MERGES,
+        );
     }
 }
 

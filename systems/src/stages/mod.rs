@@ -8,6 +8,7 @@
 //! | masks become per-object observations | `segment` |
 //! | objects appear and take in their views (class votes, keyframes) | `track` |
 //! | observed clouds grow, oriented boxes follow | `clouds` |
+//! | an object found to be part of another is taken into it | `merge` |
 //! | objects join their class's category | `categorize` |
 //! | fields appear and train (object fields, background) | `train` |
 //! | classes are registered, subcategories split | `register` |
@@ -25,6 +26,7 @@ pub mod log_camera;
 pub mod log_categories;
 pub mod log_rerun;
 pub mod log_stream;
+pub mod merge;
 pub mod meshes;
 pub mod register;
 pub mod segment;

@@ -43,7 +43,7 @@ pub fn attach_fields(
         let mut rng = seeded_rng(settings.0.seed, RngStream::ObjectField(object.id));
         let field = OccupancyField::new(OBJECT_HIDDEN, cfg.object_scale(), &mut rng);
         let index = fields.objects.push(field);
-        fields.object_owners.push(entity);
+        fields.object_owners.push(Some(entity));
         let origin = bounds.oriented_box.center();
         commands
             .entity(entity)

@@ -5,6 +5,7 @@ mod checkpoint_resume;
 mod degenerate_scenes;
 mod live_mapping;
 mod mapper_pipeline;
+mod object_merges;
 mod online_category;
 mod rerun_recording;
 mod run_phases;

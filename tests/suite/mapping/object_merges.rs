@@ -1,0 +1,99 @@
+//! An object made twice with per-frame ids is merged in the map: the small scene's largest
+//! object (the table) is first seen by its left half only, then split into two masks (its right half made an
+//! object of its own), then whole; the mapper ends with one object of the first id holding both
+//! halves' sightings.
+
+use catmap::dataset::FrameSource;
+use catmap::objects::instance_association::{InstanceSource, ObjectMerge};
+use catmap::synth::{Preset, SyntheticScene};
+use catmap::{FrameIndex, InstanceLabel, MapperConfig, ObjectId, RgbdFrame};
+use catmap_systems::Mapper;
+
+const SEED: u64 = 11;
+
+/// The id with the most pixels over every frame of `scene` (the table, in view throughout).
+fn largest_object(scene: &SyntheticScene) -> ObjectId {
+    let mut counts = std::collections::BTreeMap::<ObjectId, usize>::new();
+    for t in 0..scene.len() {
+        let frame = scene.read_frame(t).expect("synthetic frames render");
+        for i in 0..frame.instances.len() {
+            if let Some(id) = frame.instances.object_at(i) {
+                *counts.entry(id).or_default() += 1;
+            }
+        }
+    }
+    counts
+        .into_iter()
+        .max_by_key(|&(id, n)| (n, std::cmp::Reverse(id)))
+        .expect("objects in view")
+        .0
+}
+
+/// How frame `t` shows the object: its left half alone (the right half unknown), split into two
+/// masks, or whole.
+fn shown(t: usize, mut frame: RgbdFrame, object: ObjectId) -> RgbdFrame {
+    let w = frame.intrinsics.width as usize;
+    let mut columns: Vec<usize> = (0..frame.instances.len())
+        .filter(|&i| frame.instances.object_at(i) == Some(object))
+        .map(|i| i % w)
+        .collect();
+    columns.sort_unstable();
+    let Some(&middle) = columns.get(columns.len() / 2) else {
+        return frame;
+    };
+    let right = match t {
+        0..3 => InstanceLabel::Unknown,
+        3..6 => InstanceLabel::Object(ObjectId(900)),
+        _ => return frame,
+    };
+    for i in 0..frame.instances.len() {
+        if frame.instances.object_at(i) == Some(object) && i % w >= middle {
+            frame.instances.set(i, right);
+        }
+    }
+    frame
+}
+
+#[test]
+fn an_object_first_seen_by_halves_is_merged_into_one_with_its_first_id() {
+    let scene = SyntheticScene::generate(SEED, Preset::Small).expect("the small scene generates");
+    let mut config = MapperConfig {
+        seed: SEED,
+        fields: catmap::config::FieldConfig::disabled(),
+        ..MapperConfig::default()
+    };
+    config.category_fields.enabled = false;
+    config.objects.association.instances = InstanceSource::PerFrame;
+    // A pair is judged once the younger was first seen this many frames ago (the scene is short).
+    config.objects.association.candidate_window_frames = 4;
+    let mut mapper = Mapper::new(config).expect("valid config");
+    let object = largest_object(&scene);
+    let mut seen_in = 0;
+    for t in 0..scene.len() {
+        let frame = scene.read_frame(t).expect("synthetic frames render");
+        seen_in += u64::from((0..frame.instances.len()).any(|i| frame.instances.object_at(i) == Some(object)));
+        mapper.push(shown(t, frame, object)).expect("the frame is valid");
+        mapper.step();
+    }
+    mapper.end_stream();
+    mapper.step();
+    let map = mapper.finish();
+    assert_eq!(map.merges.len(), 1, "{:?}", map.merges);
+    let ObjectMerge { frame, kept, absorbed } = map.merges[0];
+    assert!(kept < absorbed, "the first id is kept: {kept} absorbed {absorbed}");
+    assert_eq!(
+        frame,
+        FrameIndex(7),
+        "the second whole frame, 4 after the right half was first seen"
+    );
+    assert!(map.object(absorbed).is_none(), "object {absorbed} is gone");
+    // Seen as an object from its third frame on (two frames as a candidate), the right half's
+    // one frame as an object of its own added.
+    let merged = map.object(kept).expect("the kept object");
+    assert_eq!(merged.visible_frames, seen_in - 1, "the frames either half was seen in");
+    assert!(
+        map.categories.iter().all(|c| !c.members.contains(&absorbed)),
+        "{:?}",
+        map.categories
+    );
+}
