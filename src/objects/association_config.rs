@@ -28,7 +28,8 @@ pub struct AssociationConfig {
     pub ambiguity_ratio: f32,
     /// Frames a candidate must be seen in to become an object.
     pub min_frames: u32,
-    /// A candidate not seen for this many frames is forgotten.
+    /// A candidate not seen for this many frames is forgotten, and two objects are judged one
+    /// only once the younger was first seen this many frames ago.
     pub candidate_window_frames: u64,
     /// A mask no object of its class takes, overlapping an object of another class by at least
     /// this share, is that object under a confused class and is held back ([`crate::objects::instance_association`]); above 1

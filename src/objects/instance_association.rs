@@ -30,6 +30,8 @@
 //!
 //! An object's footprint grows only into voxels no other object holds and no candidate of its
 //! class covers: what a mask merging it with a neighbour not yet made adds is the neighbour's.
+//! Held-back masks' pixels become unsure ([`crate::objects::segment::relabel_instances`]). Decisions
+//! depend only on the masks and the state, never on the masks' own ids or their order.
 //!
 //! An object made twice (its ends seen in views that barely overlap as the camera panned, or a
 //! fragment of a mask the segmenter split) is **merged**: two objects of one class shown joined
@@ -37,8 +39,6 @@
 //! id once the younger was first seen `candidate_window_frames` ago
 //! ([`crate::objects::pair_evidence`]); [`FrameAssociation::merges`] reports it and the map
 //! takes the other's sightings into it ([`crate::objects::object_merge`]).
-//! Held-back masks' pixels become unsure ([`crate::objects::segment::relabel_instances`]). Decisions
-//! depend only on the masks and the state, never on the masks' own ids or their order.
 
 use std::collections::{BTreeMap, BTreeSet};
 
