@@ -20,7 +20,6 @@ use catmap::objects::instance_association::{AssociationConfig, InstanceSource, I
 use catmap::objects::segment::segment_frame;
 use catmap::synth::{InstanceIds, Preset, SensorModel, SensorSettings, SyntheticScene};
 
-#[expect(clippy::print_stdout, reason = "a benchmark prints its figures")]
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let flag = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1));
