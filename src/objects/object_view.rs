@@ -196,8 +196,8 @@ impl ObjectView {
     /// Takes in the view of the same frame kept by an object found to be part of this one: its
     /// pixels that showed that object, inside this crop, show this one.
     pub fn absorb(&mut self, other: &ObjectView) {
+        let width = other.region.width();
         for (j, state) in other.states.iter().enumerate() {
-            let width = other.region.width();
             let (u, v) = (
                 other.region.u_min + j as u32 % width,
                 other.region.v_min + j as u32 / width,

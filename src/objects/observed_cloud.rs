@@ -146,7 +146,8 @@ impl ObservedCloud {
     }
 
     #[inline]
-    fn add_to_voxel(&mut self, key: u64, sum: Vector3<f64>, count: u32) {
+    fn add_to_voxel(&mut self, key: u64, sum: Vector3<f64>, count: u32) -> &mut VoxelSum {
+        self.points_added += u64::from(count);
         let v = self.voxels.entry(key).or_insert(VoxelSum {
             sum: Vector3::zeros(),
             count: 0,
@@ -154,7 +155,7 @@ impl ObservedCloud {
         });
         v.sum += sum;
         v.count += count;
-        self.points_added += u64::from(count);
+        v
     }
 
     /// Back-projects the listed pixels of `frame` (invalid depth skipped) and adds them.
@@ -235,8 +236,7 @@ impl ObservedCloud {
     /// and view votes add up voxel by voxel.
     pub fn absorb(&mut self, other: &ObservedCloud) {
         for (&key, theirs) in &other.voxels {
-            self.add_to_voxel(key, theirs.sum, theirs.count);
-            let votes = &mut self.voxels.get_mut(&key).expect("just added").votes;
+            let votes = &mut self.add_to_voxel(key, theirs.sum, theirs.count).votes;
             votes.own += theirs.votes.own;
             votes.elsewhere += theirs.votes.elsewhere;
         }

@@ -152,12 +152,11 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
     let fields = world.resource::<Fields>();
     let mut object_fields = Vec::new();
     for (index, (field, owner)) in fields.objects.fields().iter().zip(&fields.object_owners).enumerate() {
-        let id = match owner {
-            Some(owner) => Some(
-                id_of(owner).ok_or_else(|| CatmapError::Degenerate(format!("object field {index} has no owner")))?,
-            ),
-            None => None,
-        };
+        let no_owner = || CatmapError::Degenerate(format!("object field {index} has no owner"));
+        let id = owner
+            .as_ref()
+            .map(|owner| id_of(owner).ok_or_else(no_owner))
+            .transpose()?;
         object_fields.push((
             id,
             store_occupancy_field(field, &format!("objects/{index}"), &mut tensors),

@@ -44,7 +44,8 @@ pub fn merge_objects(
     merges.sort_by_key(|(frame, _)| *frame);
     for (_, merge) in merges {
         let entities = (index.0.get(&merge.kept).copied()).zip(index.0.get(&merge.absorbed).copied());
-        let Some(Ok([kept, absorbed])) = entities.map(|(k, a)| objects.get_many_mut([k, a])) else {
+        let Some((absorbed_entity, Ok([kept, absorbed]))) = entities.map(|(k, a)| (a, objects.get_many_mut([k, a])))
+        else {
             tracing::warn!(kept = %merge.kept, absorbed = %merge.absorbed, "merged objects have no entities");
             continue;
         };
@@ -87,10 +88,8 @@ pub fn merge_objects(
         if let Some(n) = small.0.remove(&merge.absorbed) {
             *small.0.entry(merge.kept).or_default() += n;
         }
-        let absorbed_entity = index.0.remove(&merge.absorbed);
-        if let Some(entity) = absorbed_entity {
-            commands.entity(entity).despawn();
-        }
+        index.0.remove(&merge.absorbed);
+        commands.entity(absorbed_entity).despawn();
         tracing::info!(kept = %merge.kept, absorbed = %merge.absorbed, frame = %merge.frame, "objects merged");
     }
 }
