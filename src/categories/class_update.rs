@@ -22,7 +22,7 @@ use crate::geometry::mesh::Aabb;
 use crate::geometry::oriented_box::OrientedBox;
 use crate::ids::{ClassId, ObjectId};
 use crate::objects::keyframes::KeyframeWindow;
-use crate::objects::object_bounds::shape_points;
+use crate::objects::object_bounds::{ShapeRule, shape_points};
 use crate::objects::object_view::ObjectView;
 use crate::objects::observed_cloud::ObservedCloud;
 use crate::objects::observed_space::ObservedSpace;
@@ -56,9 +56,9 @@ pub struct ClassMember<'a> {
     pub id: ObjectId,
     /// Its observed cloud.
     pub cloud: &'a ObservedCloud,
-    /// Its cloud's voxels holding fewer points are strays, left out of its shape as out of its
-    /// box (`objects.box_min_voxel_points`; [`shape_points`]).
-    pub min_voxel_points: u32,
+    /// Which of its cloud's voxels make its shape, as they make its box
+    /// (`objects.box_min_voxel_points`, `objects.shape_voxels`; [`shape_points`]).
+    pub shape: ShapeRule,
     /// Its minimum-volume oriented box.
     pub bounds: OrientedBox,
     /// Its per-object field.
@@ -72,7 +72,7 @@ pub struct ClassMember<'a> {
 impl ClassMember<'_> {
     /// The points its registration reads: its box's ([`shape_points`]).
     fn shape_points(&self) -> Vec<Point3<f32>> {
-        shape_points(self.cloud, self.min_voxel_points)
+        shape_points(self.cloud, self.shape)
     }
 
     /// What its sphere would be evaluated on now.
@@ -239,6 +239,7 @@ fn member_reliability(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::objects::config::ShapeVoxels;
 
     fn cloud(points: usize) -> ObservedCloud {
         let mut cloud = ObservedCloud::new(0.01);
@@ -261,7 +262,10 @@ mod tests {
                 origin: Point3::origin(),
                 steps,
             },
-            min_voxel_points: 1,
+            shape: ShapeRule {
+                min_voxel_points: 1,
+                voxels: ShapeVoxels::Uncontested,
+            },
             stored: None,
             keyframes: None,
         })
@@ -288,8 +292,16 @@ mod tests {
                 cloud.add_point(&Point3::new(far, k as f32 * 0.05, 0.4));
             }
         }
-        let bounds = fit_minimum_volume_box(&shape_points(&cloud, 3)).expect("a box");
+        let bounds = fit_minimum_volume_box(&shape_points(&cloud, uncontested(3))).expect("a box");
         (cloud, bounds)
+    }
+
+    /// The shape rule of exact masks, with voxels of at least `min_voxel_points` points.
+    fn uncontested(min_voxel_points: u32) -> ShapeRule {
+        ShapeRule {
+            min_voxel_points,
+            voxels: ShapeVoxels::Uncontested,
+        }
     }
 
     /// The largest ratio of a registered frame's extents to the box of a chair seen without
@@ -307,7 +319,7 @@ mod tests {
                 ClassMember {
                     id: ObjectId(i as u32 + 1),
                     cloud,
-                    min_voxel_points,
+                    shape: uncontested(min_voxel_points),
                     bounds: *bounds,
                     field: MemberField {
                         index: i,

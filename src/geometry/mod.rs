@@ -1,6 +1,7 @@
 //! Geometry shared by every layer: oriented boxes, nearest-neighbour queries, triangle meshes and
 //! their PLY files.
 
+pub mod connected_parts;
 pub mod face_normals_turn;
 pub mod local_plane;
 pub mod local_surfaces;

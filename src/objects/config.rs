@@ -32,6 +32,12 @@ pub struct ObjectConfig {
     /// land in a voxel of their own, while a surface fills its voxels frame after frame. All voxels count while fewer than
     /// [`crate::objects::object_bounds::MIN_POINTS_FOR_BOX`] hold enough.
     pub box_min_voxel_points: u32,
+    /// Which of those voxels make the object's shape
+    /// ([`crate::objects::object_bounds::shape_points`]): `uncontested` (exact masks: every voxel
+    /// no view contests) or `mostly_own_main_parts` (a segmenter's masks: those at least half
+    /// their views saw as the object's, in the connected parts that hold a large share of them).
+    /// Set by [`ObjectConfig::with_mask_borders`].
+    pub shape_voxels: ShapeVoxels,
     /// Radius of the local surface (a quadric over the local plane) each point the object's box
     /// and mirror plane are fitted to is moved onto, metres ([`crate::geometry::local_surfaces`];
     /// the points of its shape, [`crate::objects::object_bounds::shape_points`]): a depth
@@ -102,6 +108,21 @@ pub struct ObjectConfig {
 /// 46).
 pub const CAMERA_BOX_SMOOTHING_M: f32 = 0.08;
 
+/// Which of an object's cloud voxels (of at least `box_min_voxel_points` points) make its shape:
+/// its box and its registration ([`crate::objects::object_bounds::shape_points`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShapeVoxels {
+    /// Every voxel no view contests ([`crate::objects::observed_cloud::ViewVotes::contested`]).
+    #[default]
+    Uncontested,
+    /// Those at least half the views that saw them saw as the object's, in the connected parts
+    /// holding a large share of them: what a segmenter gave the object in a frame or two — a
+    /// neighbour merged into its mask, a mask bled onto a wall behind, a spurious mask — is left
+    /// out.
+    MostlyOwnMainParts,
+}
+
 /// What the masks' borders are like (`catmap run --masks`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -121,15 +142,16 @@ impl ObjectConfig {
     /// least 3 points (a pixel the band missed lands in a voxel of its own; session 38); exact
     /// masks get none of it (the band costs thin parts every pixel).
     pub fn with_mask_borders(self, borders: MaskBorders) -> Self {
-        let (bleed_radius_px, bleed_depth_per_m, mask_border_px, box_min_voxel_points) = match borders {
-            MaskBorders::Exact => (0, 0.0, 0, 1),
-            MaskBorders::Segmenter => (4, 0.1, 2, 3),
+        let (bleed_radius_px, bleed_depth_per_m, mask_border_px, box_min_voxel_points, shape_voxels) = match borders {
+            MaskBorders::Exact => (0, 0.0, 0, 1, ShapeVoxels::Uncontested),
+            MaskBorders::Segmenter => (4, 0.1, 2, 3, ShapeVoxels::MostlyOwnMainParts),
         };
         Self {
             bleed_radius_px,
             bleed_depth_per_m,
             mask_border_px,
             box_min_voxel_points,
+            shape_voxels,
             ..self
         }
     }
@@ -172,6 +194,7 @@ impl Default for ObjectConfig {
             bounds_refresh_growth: 0.1,
             bounds_voxel_m: 0.02,
             box_min_voxel_points: 1,
+            shape_voxels: ShapeVoxels::Uncontested,
             box_smoothing_m: 0.0,
             voxel_votes: VoxelVotes::default(),
             background_pixel_stride: 4,
@@ -229,6 +252,7 @@ mod tests {
             (4, 0.1, 2)
         );
         assert_eq!(segmenter.box_min_voxel_points, 3, "boxes skip lone voxels");
+        assert_eq!(segmenter.shape_voxels, ShapeVoxels::MostlyOwnMainParts);
         assert_eq!(segmenter.bleed_depth_m, 0.1, "the rest is kept");
         let exact = segmenter.with_mask_borders(MaskBorders::Exact);
         assert_eq!(exact, ObjectConfig::default());

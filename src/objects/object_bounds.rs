@@ -3,12 +3,13 @@
 use nalgebra::Point3;
 
 use crate::error::{CatmapError, Result};
+use crate::geometry::connected_parts::main_parts;
 use crate::geometry::local_surfaces::onto_local_surfaces;
 use crate::geometry::mirror_symmetry::{MirrorDirections, MirrorPlane, SymmetryConfig, find_vertical_mirrors};
 use crate::geometry::oriented_box::{OrientedBox, fit_minimum_volume_box};
 use crate::geometry::round_axis::plane_across_axis;
 use crate::geometry::upright_box::{fit_upright_box, fit_upright_box_on_faces};
-use crate::objects::config::{BoxFit, ObjectConfig, RoundObjects};
+use crate::objects::config::{BoxFit, ObjectConfig, RoundObjects, ShapeVoxels};
 use crate::objects::observed_cloud::{ObservedCloud, voxel_downsample};
 use crate::training::{StreamPhase, takes_shape_priors};
 use rayon::prelude::*;
@@ -148,17 +149,64 @@ pub fn refit_stale_boxes<'a, K: Send>(
         .collect()
 }
 
-/// The points an object's shape is measured from (its box, its registration to its class):
-/// the centroids of the cloud's uncontested voxels holding at least `min_voxel_points` points —
-/// a depth camera's stray points each land in a voxel of their own, and 28 of them on a
-/// Kinect-like chair's 10 000 voxels stretched its registered frame to three times its depth —
-/// or of all its uncontested voxels while fewer than [`MIN_POINTS_FOR_BOX`] hold enough.
-pub fn shape_points(cloud: &ObservedCloud, min_voxel_points: u32) -> Vec<Point3<f32>> {
-    let kept = cloud.points_of_voxels_with(min_voxel_points);
-    if kept.len() >= MIN_POINTS_FOR_BOX {
-        return kept;
+/// The cell edge of the grid on which an object's shape points are grouped into connected
+/// parts ([`shape_points`]), metres: points up to one cell apart (and some up to two) join, so a
+/// depth camera's holes of a few centimetres do not cut a part off.
+pub const SHAPE_PART_CELL_M: f32 = 0.03;
+
+/// The least share of an object's shape points a connected part must hold to stay in its shape
+/// ([`shape_points`]).
+pub const SHAPE_PART_MIN_SHARE: f32 = 0.05;
+
+/// Which cloud voxels make an object's shape: those of at least `min_voxel_points` points,
+/// taken as `voxels` says (`objects.box_min_voxel_points`, `objects.shape_voxels`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ShapeRule {
+    /// Fewest points a voxel holds.
+    pub min_voxel_points: u32,
+    /// Which of those count.
+    pub voxels: ShapeVoxels,
+}
+
+impl ObjectConfig {
+    /// The rule of an object's shape points under these settings.
+    pub fn shape_rule(&self) -> ShapeRule {
+        ShapeRule {
+            min_voxel_points: self.box_min_voxel_points,
+            voxels: self.shape_voxels,
+        }
     }
-    cloud.points()
+}
+
+/// The points an object's shape is measured from (its box, its registration to its class):
+/// - the centroids of the cloud's voxels holding at least `rule.min_voxel_points` points — a
+///   depth camera's stray points each land in a voxel of their own, and 28 of them on a
+///   Kinect-like chair's 10 000 voxels stretched its registered frame to three times its depth —
+/// - under [`ShapeVoxels::Uncontested`], those no view contests;
+/// - under [`ShapeVoxels::MostlyOwnMainParts`] (a segmenter's masks), those that at least half
+///   the views that saw them saw as the object's
+///   ([`crate::objects::observed_cloud::ViewVotes::mostly_own`]: a neighbour a segmenter merged
+///   into the object's mask in a few frames is seen as the neighbour in the others), in the
+///   connected parts ([`main_parts`] on a grid of [`SHAPE_PART_CELL_M`]) holding at least
+///   [`SHAPE_PART_MIN_SHARE`] of them: a mask bled onto a wall metres behind the object, or a
+///   spurious mask given to it, in a frame or two, lies apart from it and is a small share of it.
+///   With a segmenter's masks and exact depth these had stretched a 1.2 m cabinet's box to 4.6 m
+///   (docs/ROBUSTNESS.md).
+///
+/// While fewer than [`MIN_POINTS_FOR_BOX`] voxels pass, all uncontested voxels count.
+pub fn shape_points(cloud: &ObservedCloud, rule: ShapeRule) -> Vec<Point3<f32>> {
+    let min = rule.min_voxel_points;
+    let kept = match rule.voxels {
+        ShapeVoxels::Uncontested => cloud.points_of_voxels_with(min),
+        ShapeVoxels::MostlyOwnMainParts => cloud.points_of_voxels_where(|n, votes| n >= min && votes.mostly_own()),
+    };
+    if kept.len() < MIN_POINTS_FOR_BOX {
+        return cloud.points();
+    }
+    match rule.voxels {
+        ShapeVoxels::Uncontested => kept,
+        ShapeVoxels::MostlyOwnMainParts => main_parts(kept, SHAPE_PART_CELL_M, SHAPE_PART_MIN_SHARE),
+    }
 }
 
 /// `points` moved onto their neighbours' surfaces within `radius_m` ([`onto_local_surfaces`], fitted
@@ -171,11 +219,25 @@ pub fn on_local_surfaces(points: Vec<Point3<f32>>, radius_m: f32) -> Vec<Point3<
     onto_local_surfaces(&points, &reference, radius_m)
 }
 
-/// The box of the cloud's [`shape_points`] (`box_min_voxel_points`), moved onto their local
+/// The box of the cloud's [`shape_points`] (`box_min_voxel_points`, `shape_voxels`), moved onto their local
 /// surfaces (`box_smoothing_m`, [`on_local_surfaces`]), thinned to `bounds_voxel_m`, fitted as
 /// `box_fit` says (unset: the minimum-volume box), every edge ≥ `min_extent_m`.
 pub fn fit_object_box(cloud: &ObservedCloud, cfg: &ObjectConfig) -> Result<OrientedBox> {
     Ok(fit_object_bounds(cloud, MirrorStep::Keep(None), cfg)?.oriented_box)
+}
+
+/// The box of an object's shape points (moved onto their local surfaces, `box_smoothing_m`),
+/// thinned to `bounds_voxel_m`, fitted as `box_fit` says, every edge ≥ `min_extent_m`; and the
+/// thinned points.
+pub fn fit_box_to_points(shape: Vec<Point3<f32>>, cfg: &ObjectConfig) -> Result<(OrientedBox, Vec<Point3<f32>>)> {
+    let shape = on_local_surfaces(shape, cfg.box_smoothing_m);
+    let thinned = voxel_downsample(&shape, cfg.bounds_voxel_m);
+    let oriented_box = match cfg.box_fit.unwrap_or_default() {
+        BoxFit::MinimumVolume => fit_minimum_volume_box(&thinned)?,
+        BoxFit::Upright => fit_upright_box(&thinned)?,
+        BoxFit::UprightOnFaces => fit_upright_box_on_faces(&thinned, cfg.box_turn)?,
+    };
+    Ok((oriented_box.with_min_extent(cfg.min_extent_m), thinned))
 }
 
 /// The box of [`fit_object_box`] and, as `mirror` says, the mirror plane of the same thinned
@@ -187,14 +249,7 @@ pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &Object
             cloud.len()
         )));
     }
-    let shape = on_local_surfaces(shape_points(cloud, cfg.box_min_voxel_points), cfg.box_smoothing_m);
-    let thinned = voxel_downsample(&shape, cfg.bounds_voxel_m);
-    let oriented_box = match cfg.box_fit.unwrap_or_default() {
-        BoxFit::MinimumVolume => fit_minimum_volume_box(&thinned)?,
-        BoxFit::Upright => fit_upright_box(&thinned)?,
-        BoxFit::UprightOnFaces => fit_upright_box_on_faces(&thinned, cfg.box_turn)?,
-    };
-    let oriented_box = oriented_box.with_min_extent(cfg.min_extent_m);
+    let (oriented_box, thinned) = fit_box_to_points(shape_points(cloud, cfg.shape_rule()), cfg)?;
     let mirror = match mirror {
         MirrorStep::Search => {
             let (yaw, symmetry) = (oriented_box.yaw(), SymmetryConfig::default());
@@ -229,3 +284,7 @@ mod noise_tests;
 #[cfg(test)]
 #[path = "object_bounds_round_tests.rs"]
 mod round_tests;
+
+#[cfg(test)]
+#[path = "object_bounds_parts_tests.rs"]
+mod parts_tests;

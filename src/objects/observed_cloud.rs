@@ -47,6 +47,11 @@ impl ViewVotes {
     pub fn contested(&self) -> bool {
         self.elsewhere > CONTESTED_RATIO * self.own
     }
+
+    /// At least half the views that saw the voxel saw it as its owner (true when none voted).
+    pub fn mostly_own(&self) -> bool {
+        self.own >= self.elsewhere
+    }
 }
 
 /// Whether an object's views vote on its cloud's voxels (`objects.voxel_votes`).
@@ -232,6 +237,15 @@ impl ObservedCloud {
         added
     }
 
+    /// Adds one world point and `votes` to its voxel's votes (tests' fixtures).
+    #[cfg(test)]
+    pub(crate) fn add_voted_point(&mut self, p: &Point3<f32>, votes: ViewVotes) {
+        let key = voxel_key(p, 1.0 / self.voxel_m);
+        let voxel = self.add_to_voxel(key, p.coords.cast::<f64>(), 1);
+        voxel.votes.own += votes.own;
+        voxel.votes.elsewhere += votes.elsewhere;
+    }
+
     /// Takes in the cloud of an object found to be part of this one (on the same grid): points
     /// and view votes add up voxel by voxel.
     pub fn absorb(&mut self, other: &ObservedCloud) {
@@ -240,6 +254,15 @@ impl ObservedCloud {
             votes.own += theirs.votes.own;
             votes.elsewhere += theirs.votes.elsewhere;
         }
+    }
+
+    /// Every occupied voxel, contested or not: its centroid, its point count and its view votes,
+    /// in key order.
+    pub fn voxels(&self) -> Vec<(Point3<f32>, u32, ViewVotes)> {
+        let mut keyed: Vec<(u64, (Point3<f32>, u32, ViewVotes))> =
+            self.voxels.iter().map(|(&k, v)| (k, (v.centroid(), v.count, v.votes))).collect();
+        keyed.sort_unstable_by_key(|(k, _)| *k);
+        keyed.into_iter().map(|(_, v)| v).collect()
     }
 
     /// Number of occupied voxels (= points of [`ObservedCloud::points`]).
@@ -266,10 +289,15 @@ impl ObservedCloud {
     /// The centroids of the uncontested voxels holding at least `min_points` points, in key
     /// order.
     pub fn points_of_voxels_with(&self, min_points: u32) -> Vec<Point3<f32>> {
+        self.points_of_voxels_where(|count, votes| count >= min_points && !votes.contested())
+    }
+
+    /// The centroids of the voxels whose point count and view votes `keep` takes, in key order.
+    pub fn points_of_voxels_where(&self, keep: impl Fn(u32, ViewVotes) -> bool) -> Vec<Point3<f32>> {
         let mut keyed: Vec<(u64, Point3<f32>)> = self
             .voxels
             .iter()
-            .filter(|(_, v)| v.count >= min_points && !v.votes.contested())
+            .filter(|(_, v)| keep(v.count, v.votes))
             .map(|(&k, v)| (k, v.centroid()))
             .collect();
         keyed.sort_unstable_by_key(|(k, _)| *k);

@@ -7,6 +7,7 @@ use catmap::categories::class_registration::ClassRegistration;
 use catmap::categories::class_update::{
     ClassMember, ClassReadiness, ClassUpdate, MemberField, class_readiness, update_class,
 };
+use catmap::objects::object_bounds::ShapeRule;
 use catmap::{ClassId, ObjectId};
 
 use crate::components::{
@@ -42,7 +43,7 @@ pub fn register_categories(
     let due = Due {
         steps: config.field_steps_before_registration(),
         growth: config.categories.reregister_growth,
-        min_voxel_points: config.objects.box_min_voxel_points,
+        shape: config.objects.shape_rule(),
     };
     let registration = config.category_registration();
     for (entity, category, previous) in &mut categories {
@@ -73,8 +74,9 @@ struct Due {
     steps: u64,
     /// Cloud growth that registers a class again.
     growth: f32,
-    /// `objects.box_min_voxel_points`.
-    min_voxel_points: u32,
+    /// Which cloud voxels make a member's shape (`objects.box_min_voxel_points`,
+    /// `objects.shape_voxels`).
+    shape: ShapeRule,
 }
 
 /// The class's members and its latest registration when the class is due for registration
@@ -89,7 +91,7 @@ fn due_class<'a>(
     let members: Vec<_> = category
         .members
         .iter()
-        .map(|id| class_member(*id, index, objects, due.min_voxel_points))
+        .map(|id| class_member(*id, index, objects, due.shape))
         .collect();
     let registered = previous.map(|p| &p.registered_points);
     if class_readiness(&members, registered, due.steps, due.growth) != ClassReadiness::Due {
@@ -104,13 +106,13 @@ fn class_member<'a>(
     id: ObjectId,
     index: &ObjectIndex,
     objects: &'a Query<MemberParts>,
-    min_voxel_points: u32,
+    shape: ShapeRule,
 ) -> Option<ClassMember<'a>> {
     let (cloud, bounds, slot, loss, stored, keyframes) = objects.get(*index.0.get(&id)?).ok()?;
     Some(ClassMember {
         id,
         cloud: &cloud.0,
-        min_voxel_points,
+        shape,
         bounds: bounds.oriented_box,
         field: MemberField {
             index: slot.index,
