@@ -20,9 +20,9 @@ use anyhow::{Context, Result, bail};
 use catmap::ObjectId;
 use catmap::config::MapperConfig;
 use catmap::dataset::FrameSource;
+use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
 use catmap::dataset::smoothed_depth::with_depth_smoothing;
 use catmap::geometry::oriented_box::OrientedBox;
-use catmap::dataset::replica::{ReplicaOptions, ReplicaSequence};
 use catmap::metrics::association_purity::AssociationTally;
 use catmap::objects::border_votes::LabelHistory;
 use catmap::objects::config::{MaskBorders, ObjectConfig};
@@ -116,9 +116,13 @@ fn main() -> Result<()> {
             .iter()
             .map(|o| (o.id, o.design.name().to_owned()))
             .collect();
-        report(&format!("{} seed {seed}", preset.name()), &run, Some(&truths), &|id| {
-            exact.object(id).map_or("?", |t| t.design.name()).to_owned()
-        }, &setup.cfg);
+        report(
+            &format!("{} seed {seed}", preset.name()),
+            &run,
+            Some(&truths),
+            &|id| exact.object(id).map_or("?", |t| t.design.name()).to_owned(),
+            &setup.cfg,
+        );
     }
     Ok(())
 }
@@ -168,7 +172,10 @@ fn associate(noisy: &dyn FrameSource, exact: &dyn FrameSource, setup: &Setup) ->
             }
             merges += 1;
             if let Some(absorbed) = clouds.remove(&merge.absorbed) {
-                clouds.entry(merge.kept).or_insert_with(|| ObservedCloud::new(cfg.cloud_voxel_m)).absorb(&absorbed);
+                clouds
+                    .entry(merge.kept)
+                    .or_insert_with(|| ObservedCloud::new(cfg.cloud_voxel_m))
+                    .absorb(&absorbed);
             }
         }
         let relabelled = changed.unwrap_or(frame);
@@ -176,7 +183,9 @@ fn associate(noisy: &dyn FrameSource, exact: &dyn FrameSource, setup: &Setup) ->
         tally.add(&relabelled.instances, &exact_frame.instances);
         if setup.boxes {
             for (&id, seen) in &observation.objects {
-                let cloud = clouds.entry(id).or_insert_with(|| ObservedCloud::new(cfg.cloud_voxel_m));
+                let cloud = clouds
+                    .entry(id)
+                    .or_insert_with(|| ObservedCloud::new(cfg.cloud_voxel_m));
                 cloud.add_view(&relabelled, &seen.pixels, id, cfg.voxel_votes, setup.depth_noise_per_m2);
             }
             let mut by_truth: BTreeMap<ObjectId, Vec<u32>> = BTreeMap::new();
@@ -186,7 +195,9 @@ fn associate(noisy: &dyn FrameSource, exact: &dyn FrameSource, setup: &Setup) ->
                 }
             }
             for (id, pixels) in by_truth {
-                let cloud = truth_clouds.entry(id).or_insert_with(|| ObservedCloud::new(cfg.cloud_voxel_m));
+                let cloud = truth_clouds
+                    .entry(id)
+                    .or_insert_with(|| ObservedCloud::new(cfg.cloud_voxel_m));
                 cloud.add_pixels(&exact_frame, &pixels);
             }
         }

@@ -36,7 +36,10 @@ fn x_range_under(cloud: &ObservedCloud, shape_voxels: ShapeVoxels) -> (f32, f32)
     };
     let fitted = fit_object_box(cloud, &cfg).expect("a box");
     let xs = fitted.corners().map(|c| c.x);
-    (xs.iter().copied().fold(f32::MAX, f32::min), xs.iter().copied().fold(f32::MIN, f32::max))
+    (
+        xs.iter().copied().fold(f32::MAX, f32::min),
+        xs.iter().copied().fold(f32::MIN, f32::max),
+    )
 }
 
 /// The fitted box's x range under a segmenter's rule, metres.
@@ -52,9 +55,15 @@ fn a_speck_metres_away_seen_in_one_view_does_not_stretch_the_box() {
         cloud.add_voted_point(&Point3::new(3.0, -0.2 + i as f32 * 0.01, 0.5), votes(1, 0));
     }
     let (_, uncontested) = x_range_under(&cloud, ShapeVoxels::Uncontested);
-    assert!(uncontested > 2.9, "exact masks' rule keeps the speck: x to {uncontested}");
+    assert!(
+        uncontested > 2.9,
+        "exact masks' rule keeps the speck: x to {uncontested}"
+    );
     let (lo, hi) = x_range(&cloud);
-    assert!((lo + 0.4).abs() < 0.015 && (hi - 0.4).abs() < 0.015, "x from {lo} to {hi}");
+    assert!(
+        (lo + 0.4).abs() < 0.015 && (hi - 0.4).abs() < 0.015,
+        "x from {lo} to {hi}"
+    );
 }
 
 #[test]
@@ -64,7 +73,10 @@ fn a_neighbour_most_views_saw_as_its_own_is_left_out_even_when_it_touches() {
     // cabinet's mask in one frame of four (not contested: 3 to 1 is under CONTESTED_RATIO).
     for i in 0..50 {
         for k in 0..20 {
-            cloud.add_voted_point(&Point3::new(0.405 + i as f32 * 0.01, 0.0, 0.3 + k as f32 * 0.01), votes(1, 3));
+            cloud.add_voted_point(
+                &Point3::new(0.405 + i as f32 * 0.01, 0.0, 0.3 + k as f32 * 0.01),
+                votes(1, 3),
+            );
         }
     }
     let (_, uncontested) = x_range_under(&cloud, ShapeVoxels::Uncontested);
@@ -80,7 +92,10 @@ fn a_part_apart_that_holds_a_large_share_stays() {
     // 11 000 voxels, seen as the object's in every view.
     for i in 0..50 {
         for k in 0..20 {
-            cloud.add_voted_point(&Point3::new(0.7 + i as f32 * 0.01, 0.0, 0.3 + k as f32 * 0.01), votes(8, 0));
+            cloud.add_voted_point(
+                &Point3::new(0.7 + i as f32 * 0.01, 0.0, 0.3 + k as f32 * 0.01),
+                votes(8, 0),
+            );
         }
     }
     let (_, hi) = x_range(&cloud);

@@ -259,8 +259,11 @@ impl ObservedCloud {
     /// Every occupied voxel, contested or not: its centroid, its point count and its view votes,
     /// in key order.
     pub fn voxels(&self) -> Vec<(Point3<f32>, u32, ViewVotes)> {
-        let mut keyed: Vec<(u64, (Point3<f32>, u32, ViewVotes))> =
-            self.voxels.iter().map(|(&k, v)| (k, (v.centroid(), v.count, v.votes))).collect();
+        let mut keyed: Vec<(u64, (Point3<f32>, u32, ViewVotes))> = self
+            .voxels
+            .iter()
+            .map(|(&k, v)| (k, (v.centroid(), v.count, v.votes)))
+            .collect();
         keyed.sort_unstable_by_key(|(k, _)| *k);
         keyed.into_iter().map(|(_, v)| v).collect()
     }
