@@ -27,6 +27,16 @@ fn cabinet() -> ObservedCloud {
     cloud
 }
 
+/// A panel of 50 × 20 voxels in the plane y = 0, x from `x0` on, z from 0.3 to 0.5, each with
+/// `votes`.
+fn add_panel(cloud: &mut ObservedCloud, x0: f32, votes: ViewVotes) {
+    for i in 0..50 {
+        for k in 0..20 {
+            cloud.add_voted_point(&Point3::new(x0 + i as f32 * 0.01, 0.0, 0.3 + k as f32 * 0.01), votes);
+        }
+    }
+}
+
 /// The fitted box's x range under `shape_voxels`, metres.
 fn x_range_under(cloud: &ObservedCloud, shape_voxels: ShapeVoxels) -> (f32, f32) {
     let cfg = ObjectConfig {
@@ -71,14 +81,7 @@ fn a_neighbour_most_views_saw_as_its_own_is_left_out_even_when_it_touches() {
     let mut cloud = cabinet();
     // A chair touching the cabinet's side (x from 0.4 to 0.9), 1 000 voxels: merged into the
     // cabinet's mask in one frame of four (not contested: 3 to 1 is under CONTESTED_RATIO).
-    for i in 0..50 {
-        for k in 0..20 {
-            cloud.add_voted_point(
-                &Point3::new(0.405 + i as f32 * 0.01, 0.0, 0.3 + k as f32 * 0.01),
-                votes(1, 3),
-            );
-        }
-    }
+    add_panel(&mut cloud, 0.405, votes(1, 3));
     let (_, uncontested) = x_range_under(&cloud, ShapeVoxels::Uncontested);
     assert!(uncontested > 0.85, "not contested: x to {uncontested}");
     let (_, hi) = x_range(&cloud);
@@ -90,14 +93,7 @@ fn a_part_apart_that_holds_a_large_share_stays() {
     let mut cloud = cabinet();
     // A second piece 30 cm beside it (a lamp's shade beyond the pole a camera lost): 1 000 of
     // 11 000 voxels, seen as the object's in every view.
-    for i in 0..50 {
-        for k in 0..20 {
-            cloud.add_voted_point(
-                &Point3::new(0.7 + i as f32 * 0.01, 0.0, 0.3 + k as f32 * 0.01),
-                votes(8, 0),
-            );
-        }
-    }
+    add_panel(&mut cloud, 0.7, votes(8, 0));
     let (_, hi) = x_range(&cloud);
     assert!((hi - 1.19).abs() < 0.015, "x to {hi}");
 }
