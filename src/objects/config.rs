@@ -139,8 +139,10 @@ impl ObjectConfig {
     /// pixels within 4 px (with 0.1 m of allowance per metre of depth) and a 2 px unsure band
     /// around every border — on the Kinect-like default scene 4.18 / 3.94 / 81.7 → 3.31 / 2.46 /
     /// 90.9 (docs/ROBUSTNESS.md, session 32) — and boxes fitted to the cloud voxels that hold at
-    /// least 3 points (a pixel the band missed lands in a voxel of its own; session 38); exact
-    /// masks get none of it (the band costs thin parts every pixel).
+    /// least 3 points (a pixel the band missed lands in a voxel of its own; session 38) that
+    /// most of their views saw as the object's, in its large connected parts
+    /// ([`ShapeVoxels::MostlyOwnMainParts`]; docs/ROBUSTNESS.md); exact masks get none of it (the
+    /// band costs thin parts every pixel).
     pub fn with_mask_borders(self, borders: MaskBorders) -> Self {
         let (bleed_radius_px, bleed_depth_per_m, mask_border_px, box_min_voxel_points, shape_voxels) = match borders {
             MaskBorders::Exact => (0, 0.0, 0, 1, ShapeVoxels::Uncontested),
