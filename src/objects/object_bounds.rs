@@ -149,10 +149,22 @@ pub fn refit_stale_boxes<'a, K: Send>(
         .collect()
 }
 
-/// The cell edge of the grid on which an object's shape points are grouped into connected
+/// The least cell edge of the grid on which an object's shape points are grouped into connected
 /// parts ([`shape_points`]), metres: points up to one cell apart (and some up to two) join, so a
-/// depth camera's holes of a few centimetres do not cut a part off.
+/// depth camera's holes of a few centimetres do not cut a part off. The cell is twice the
+/// spacing of the object's points where that is larger (a camera of few pixels, or an object
+/// far off: its surface's points lie farther apart than a few centimetres).
 pub const SHAPE_PART_CELL_M: f32 = 0.03;
+
+/// Under a segmenter's masks, a voxel stays in an object's shape when it holds at least
+/// `box_min_voxel_points` points or as many as this many views put in a voxel of its surface
+/// (the voxel's area over the square of the points' spacing,
+/// [`ObservedCloud::point_spacing_m`]), whichever is fewer: where a camera samples an object so
+/// sparsely that a view puts a fraction of a point in a voxel (160×120 pixels: points 1.5–2.5 cm
+/// apart on 1 cm voxels), a count cannot tell a stray point from the surface, and the views'
+/// votes and the connected parts decide alone. At 640×480 (f = 512 px) a view puts at least one
+/// point in a voxel out to 5 m, and the count stands.
+pub const SURFACE_VIEWS: f32 = 2.0;
 
 /// The least share of an object's shape points a connected part must hold to stay in its shape
 /// ([`shape_points`]).
@@ -181,13 +193,16 @@ impl ObjectConfig {
 /// The points an object's shape is measured from (its box, its registration to its class):
 /// - the centroids of the cloud's voxels holding at least `rule.min_voxel_points` points — a
 ///   depth camera's stray points each land in a voxel of their own, and 28 of them on a
-///   Kinect-like chair's 10 000 voxels stretched its registered frame to three times its depth —
+///   Kinect-like chair's 10 000 voxels stretched its registered frame to three times its depth
+///   (under [`ShapeVoxels::MostlyOwnMainParts`], or what [`SURFACE_VIEWS`] views put in a
+///   voxel of the surface if fewer) —
 /// - under [`ShapeVoxels::Uncontested`], those no view contests;
 /// - under [`ShapeVoxels::MostlyOwnMainParts`] (a segmenter's masks), those that at least half
 ///   the views that saw them saw as the object's
 ///   ([`crate::objects::observed_cloud::ViewVotes::mostly_own`]: a neighbour a segmenter merged
 ///   into the object's mask in a few frames is seen as the neighbour in the others), in the
-///   connected parts ([`main_parts`] on a grid of [`SHAPE_PART_CELL_M`]) holding at least
+///   connected parts ([`main_parts`] on a grid of [`SHAPE_PART_CELL_M`], or of twice the
+///   points' spacing [`ObservedCloud::point_spacing_m`]) holding at least
 ///   [`SHAPE_PART_MIN_SHARE`] of them: a mask bled onto a wall metres behind the object, or a
 ///   spurious mask given to it, in a frame or two, lies apart from it and is a small share of it.
 ///   With a segmenter's masks and exact depth these had stretched a 1.2 m cabinet's box to 4.6 m
@@ -198,14 +213,23 @@ pub fn shape_points(cloud: &ObservedCloud, rule: ShapeRule) -> Vec<Point3<f32>> 
     let min = rule.min_voxel_points;
     let kept = match rule.voxels {
         ShapeVoxels::Uncontested => cloud.points_of_voxels_with(min),
-        ShapeVoxels::MostlyOwnMainParts => cloud.points_of_voxels_where(|n, votes| n >= min && votes.mostly_own()),
+        ShapeVoxels::MostlyOwnMainParts => {
+            let per_view = cloud
+                .point_spacing_m()
+                .map_or(f32::INFINITY, |s| (cloud.voxel_m() / s).powi(2));
+            let min = (min as f32).min(SURFACE_VIEWS * per_view);
+            cloud.points_of_voxels_where(|n, votes| n as f32 >= min && votes.mostly_own())
+        }
     };
     if kept.len() < MIN_POINTS_FOR_BOX {
         return cloud.points();
     }
     match rule.voxels {
         ShapeVoxels::Uncontested => kept,
-        ShapeVoxels::MostlyOwnMainParts => main_parts(kept, SHAPE_PART_CELL_M, SHAPE_PART_MIN_SHARE),
+        ShapeVoxels::MostlyOwnMainParts => {
+            let cell = SHAPE_PART_CELL_M.max(2.0 * cloud.point_spacing_m().unwrap_or(0.0));
+            main_parts(kept, cell, SHAPE_PART_MIN_SHARE)
+        }
     }
 }
 

@@ -97,3 +97,44 @@ fn a_part_apart_that_holds_a_large_share_stays() {
     let (_, hi) = x_range(&cloud);
     assert!((hi - 1.19).abs() < 0.015, "x to {hi}");
 }
+
+#[test]
+fn a_sparsely_sampled_object_keeps_its_whole_shape() {
+    // A chair's back (x from −0.2 to 0.2, z from 0 to 0.9) that a camera of few pixels sampled
+    // every 2 cm, one point per voxel, and a strip at the seat's height that many views saw,
+    // 4 points per voxel: the count of 3 points per voxel keeps only the strip.
+    let mut cloud = ObservedCloud::new(0.01);
+    cloud.set_point_spacing(0.02);
+    for i in 0..21 {
+        for k in 0..46 {
+            let p = Point3::new(-0.2 + i as f32 * 0.02, 0.0, 0.005 + k as f32 * 0.02);
+            cloud.add_voted_point(&p, votes(2, 0));
+            if (22..24).contains(&k) {
+                for _ in 0..3 {
+                    cloud.add_voted_point(&p, votes(0, 0));
+                }
+            }
+        }
+    }
+    let cfg = ObjectConfig {
+        box_fit: Some(BoxFit::Upright),
+        box_min_voxel_points: 3,
+        shape_voxels: ShapeVoxels::MostlyOwnMainParts,
+        ..ObjectConfig::default()
+    };
+    let dense_only = cloud.points_of_voxels_with(3);
+    assert_eq!(dense_only.len(), 42, "the strip alone holds 3 points a voxel");
+    let z_range = |cloud: &ObservedCloud| {
+        let zs = fit_object_box(cloud, &cfg).expect("a box").corners().map(|c| c.z);
+        (
+            zs.iter().copied().fold(f32::MAX, f32::min),
+            zs.iter().copied().fold(f32::MIN, f32::max),
+        )
+    };
+    let (lo, hi) = z_range(&cloud);
+    assert!(lo < 0.01 && hi > 0.89, "z from {lo} to {hi}");
+    // Sampled every 5 mm (a view puts 4 points in a voxel), the count stands.
+    cloud.set_point_spacing(0.005);
+    let (lo, hi) = z_range(&cloud);
+    assert!(lo > 0.4 && hi < 0.51, "z from {lo} to {hi}");
+}

@@ -125,6 +125,12 @@ pub struct ObservedCloud {
     voxel_m: f32,
     voxels: HashMap<u64, VoxelSum, BuildHasherDefault<VoxelKeyHasher>>,
     points_added: u64,
+    /// Sum over the points back-projected from frames of the distance between neighbouring
+    /// pixels' points at the point's depth (depth / focal length), metres; and their number.
+    #[serde(default)]
+    spacing_sum_m: f64,
+    #[serde(default)]
+    spaced_points: u64,
 }
 
 impl ObservedCloud {
@@ -135,12 +141,21 @@ impl ObservedCloud {
             voxel_m,
             voxels: HashMap::default(),
             points_added: 0,
+            spacing_sum_m: 0.0,
+            spaced_points: 0,
         }
     }
 
     /// Edge of the voxel grid, metres.
     pub fn voxel_m(&self) -> f32 {
         self.voxel_m
+    }
+
+    /// The mean distance between neighbouring pixels' points on the object's surface, over the
+    /// points its frames gave it (each point's depth over the focal length), metres: how densely
+    /// the camera samples the object. `None` before any frame.
+    pub fn point_spacing_m(&self) -> Option<f32> {
+        (self.spaced_points > 0).then(|| (self.spacing_sum_m / self.spaced_points as f64) as f32)
     }
 
     /// Adds one world point.
@@ -172,11 +187,13 @@ impl ObservedCloud {
         let inv_voxel = 1.0 / self.voxel_m;
         let mut run: Option<(u64, Vector3<f64>, u32)> = None;
         let mut added = 0;
+        let mut depth_sum_m = 0.0f64;
         for &i in pixels {
             let Some(p) = frame.point_in_world(i as usize) else {
                 continue;
             };
             added += 1;
+            depth_sum_m += f64::from(frame.depth_m[i as usize]);
             let key = voxel_key(&p, inv_voxel);
             let coords = p.coords.cast::<f64>();
             match &mut run {
@@ -194,6 +211,9 @@ impl ObservedCloud {
         if let Some((run_key, sum, count)) = run {
             self.add_to_voxel(run_key, sum, count);
         }
+        let focal_px = 0.5 * f64::from(frame.intrinsics.fx + frame.intrinsics.fy);
+        self.spacing_sum_m += depth_sum_m / focal_px;
+        self.spaced_points += added as u64;
         added
     }
 
@@ -246,9 +266,19 @@ impl ObservedCloud {
         voxel.votes.elsewhere += votes.elsewhere;
     }
 
+    /// Sets the points' spacing as if every point had come from views at that spacing (tests'
+    /// fixtures).
+    #[cfg(test)]
+    pub(crate) fn set_point_spacing(&mut self, spacing_m: f32) {
+        self.spacing_sum_m = f64::from(spacing_m);
+        self.spaced_points = 1;
+    }
+
     /// Takes in the cloud of an object found to be part of this one (on the same grid): points
     /// and view votes add up voxel by voxel.
     pub fn absorb(&mut self, other: &ObservedCloud) {
+        self.spacing_sum_m += other.spacing_sum_m;
+        self.spaced_points += other.spaced_points;
         for (&key, theirs) in &other.voxels {
             let votes = &mut self.add_to_voxel(key, theirs.sum, theirs.count).votes;
             votes.own += theirs.votes.own;

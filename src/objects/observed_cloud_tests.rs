@@ -165,3 +165,21 @@ fn voxels_more_views_see_as_something_else_are_left_out_and_unsure_or_hidden_pix
     }
     assert_eq!(unvoted.points().len(), 32, "without votes every voxel counts");
 }
+
+#[test]
+fn the_point_spacing_is_the_mean_depth_over_the_focal_length() {
+    // Half the wall at 2 m, half at 3 m, f = 50 px: points 4 cm and 6 cm apart.
+    let frame = wall_frame(|_| InstanceLabel::Background, |u| if u < 4 { 2.0 } else { 3.0 });
+    let mut cloud = ObservedCloud::new(0.01);
+    assert_eq!(cloud.point_spacing_m(), None, "nothing seen yet");
+    cloud.add_pixels(&frame, &(0..32).collect::<Vec<u32>>());
+    let spacing = cloud.point_spacing_m().expect("seen");
+    assert!((spacing - 0.05).abs() < 1e-6, "spacing {spacing}");
+    let mut merged = ObservedCloud::new(0.01);
+    merged.absorb(&cloud);
+    assert_eq!(
+        merged.point_spacing_m(),
+        Some(spacing),
+        "a merged cloud keeps its spacing"
+    );
+}
