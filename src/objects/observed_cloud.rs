@@ -127,9 +127,7 @@ pub struct ObservedCloud {
     points_added: u64,
     /// Sum over the points back-projected from frames of the distance between neighbouring
     /// pixels' points at the point's depth (depth / focal length), metres; and their number.
-    #[serde(default)]
     spacing_sum_m: f64,
-    #[serde(default)]
     spaced_points: u64,
 }
 
