@@ -6,7 +6,7 @@
 //! along one side of the room so that every object is only partly observed. Frames are ray cast
 //! through a BVH on demand ([`SyntheticScene`] is a [`FrameSource`](crate::dataset::FrameSource)),
 //! and [`write_replica_layout`] writes them in the Replica vMAP layout with ground-truth meshes
-//! ([`write_tum_layout`]: in TUM RGB-D's layout with masks).
+//! ([`write_tum_layout`]: in TUM RGB-D's layout with masks; [`write_scannet_layout`]: in ScanNet's).
 //!
 //! ```no_run
 //! use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
@@ -28,6 +28,7 @@ pub mod registration_trial;
 pub mod render;
 pub mod replica_writer;
 pub mod room;
+pub mod scannet_writer;
 pub mod scene;
 pub mod sensor_noise;
 pub mod trajectory;
@@ -40,6 +41,7 @@ pub use registration_trial::{RegistrationTrial, RegistrationTrialSpec};
 pub use render::RenderedFrame;
 pub use replica_writer::write_replica_layout;
 pub use room::{Room, SurfaceLabel};
+pub use scannet_writer::write_scannet_layout;
 pub use scene::{SceneObject, SyntheticScene};
 pub use sensor_noise::{InstanceIds, SensorModel, SensorSettings};
 pub use tum_writer::write_tum_layout;

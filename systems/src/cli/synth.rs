@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 use catmap::synth::sensor_noise::{DepthNoise, MaskNoise};
 use catmap::synth::{
-    InstanceIds, Preset, SensorModel, SensorSettings, SyntheticScene, write_replica_layout, write_tum_layout,
+    InstanceIds, Preset, SensorModel, SensorSettings, SyntheticScene, write_replica_layout, write_scannet_layout,
+    write_tum_layout,
 };
 
 use crate::cli::progress::bar;
@@ -49,6 +50,9 @@ pub enum LayoutArg {
     /// TUM RGB-D's: rgb.txt, depth.txt, groundtruth.txt with timestamps at 30 Hz, depth in units
     /// of 0.2 mm, masks in instance/ and class/.
     Tum,
+    /// ScanNet's (SensReader's and the 2D labels'): color/, depth/, pose/, intrinsic/,
+    /// instance-filt/, label-filt/ and a label map (`catmap run --format scannet` reads it).
+    Scannet,
 }
 
 /// `--noise` values.
@@ -196,6 +200,7 @@ pub fn write_scene_as(
     match layout {
         LayoutArg::Replica => write_replica_layout(&scene, out, report),
         LayoutArg::Tum => write_tum_layout(&scene, out, report),
+        LayoutArg::Scannet => write_scannet_layout(&scene, out, report),
     }
     .with_context(|| format!("cannot write the synthetic scene to {}", out.display()))?;
     progress.finish_and_clear();

@@ -1,5 +1,6 @@
 //! The ScanNet reader on tiny fixtures written to temporary folders: sorting, cropping, skipped
-//! poses, and errors that name the file (and line) and the reason.
+//! poses, and errors that name the file (and line) and the reason; and a synthetic scene written in
+//! ScanNet's layout read back as the scene's own frames.
 
 use catmap::dataset::FrameSource;
 use catmap::dataset::scannet::{ScanNetOptions, ScanNetSequence};
@@ -126,4 +127,65 @@ fn a_missing_scannet_label_folder_is_named() {
     std::fs::remove_dir_all(dir.path().join("label-filt")).expect("remove labels");
     let err = ScanNetSequence::open(dir.path(), &ScanNetOptions::default()).expect_err("no labels");
     assert_mentions(&err, &["label-filt", "does not exist"]);
+}
+
+#[test]
+fn a_synthetic_scene_written_in_scannets_layout_reads_back_as_its_own_frames() {
+    use catmap::dataset::class_names::ClassNames;
+    use catmap::synth::{Preset, SyntheticScene, write_scannet_layout};
+
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = SyntheticScene::generate(1, Preset::Small).expect("small scene");
+    write_scannet_layout(&scene, dir.path(), |_, _| {}).expect("written");
+    // No crop, and the scene's whole depth range, so that every pixel compares.
+    let options = ScanNetOptions {
+        border_px: 0,
+        max_depth_m: 60.0,
+        ..ScanNetOptions::default()
+    };
+    let sequence = ScanNetSequence::open(dir.path(), &options).expect("ScanNet layout");
+    assert_eq!(sequence.len(), scene.len(), "every frame read");
+    assert_eq!(sequence.intrinsics(), scene.intrinsics());
+    let names = ClassNames::find_scannet(dir.path());
+    assert_eq!(names.get(ClassId(20)), Some("chair"), "the label map names the classes");
+    for position in [0, scene.len() - 1] {
+        let (read, truth) = (
+            sequence.read_frame(position).expect("frame"),
+            scene.read_frame(position).expect("rendered"),
+        );
+        let pose_error = read.world_from_camera.inverse() * truth.world_from_camera;
+        assert!(
+            pose_error.translation.vector.norm() < 1e-5 && pose_error.rotation.angle() < 1e-5,
+            "the pose of frame {position}: {pose_error:?}"
+        );
+        let worst = (read.depth_m.iter().zip(&truth.depth_m))
+            .map(|(&a, &b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst <= 5.01e-4, "depth within half a millimetre: {worst}");
+        // ScanNet's instance 0 is an instance: the reader shifts ids by one.
+        let mut objects = 0;
+        for i in 0..truth.instances.len() {
+            match truth.instances.label(i) {
+                InstanceLabel::Object(ObjectId(k)) => {
+                    objects += 1;
+                    assert_eq!(
+                        read.instances.label(i),
+                        InstanceLabel::Object(ObjectId(k + 1)),
+                        "pixel {i}"
+                    );
+                    assert_eq!(read.classes[i], truth.classes[i], "pixel {i}");
+                }
+                other => assert_eq!(read.instances.label(i), other, "pixel {i}"),
+            }
+        }
+        assert!(objects > 0, "frame {position} shows objects");
+        let colour_error = (read.rgb.iter().flatten().zip(truth.rgb.iter().flatten()))
+            .map(|(&a, &b)| f64::from(a.abs_diff(b)))
+            .sum::<f64>()
+            / (3 * truth.rgb.len()) as f64;
+        assert!(
+            colour_error < 3.0,
+            "JPEG colour within 3 levels on average: {colour_error}"
+        );
+    }
 }
