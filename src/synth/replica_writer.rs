@@ -47,17 +47,13 @@ struct IntrinsicsFile {
 /// Writes `scene` into `dir` (created if missing). `progress(done, total)` is called from worker
 /// threads after each frame. Errors name the file that failed.
 pub fn write_replica_layout(scene: &SyntheticScene, dir: &Path, progress: impl Fn(usize, usize) + Sync) -> Result<()> {
-    for sub in ["rgb", "depth", "semantic_class", "semantic_instance", "gt_meshes"] {
-        let path = dir.join(sub);
-        std::fs::create_dir_all(&path).map_err(|e| CatmapError::io(path, e))?;
-    }
-    let total = scene.len();
-    let done = AtomicUsize::new(0);
-    (0..total).into_par_iter().try_for_each(|i| {
-        write_frame(dir, i, &scene.render(i)?)?;
-        progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-        Ok::<_, CatmapError>(())
-    })?;
+    write_all_frames(
+        scene,
+        dir,
+        &["rgb", "depth", "semantic_class", "semantic_instance", "gt_meshes"],
+        progress,
+        |i, frame| write_frame(dir, i, frame),
+    )?;
     let trajectory: String = scene
         .trajectory()
         .iter()
@@ -79,6 +75,28 @@ pub fn write_replica_layout(scene: &SyntheticScene, dir: &Path, progress: impl F
     };
     write_json(&dir.join("intrinsics.json"), &intrinsics)?;
     write_ground_truth(scene, dir)
+}
+
+/// Creates the `folders` of a layout in `dir`, then renders every frame of `scene` (in parallel)
+/// and hands it to `write_frame`; `progress(done, total)` is called after each frame.
+pub(crate) fn write_all_frames(
+    scene: &SyntheticScene,
+    dir: &Path,
+    folders: &[&str],
+    progress: impl Fn(usize, usize) + Sync,
+    write_frame: impl Fn(usize, &RenderedFrame) -> Result<()> + Sync,
+) -> Result<()> {
+    for sub in folders {
+        let path = dir.join(sub);
+        std::fs::create_dir_all(&path).map_err(|e| CatmapError::io(path, e))?;
+    }
+    let total = scene.len();
+    let done = AtomicUsize::new(0);
+    (0..total).into_par_iter().try_for_each(|i| {
+        write_frame(i, &scene.render(i)?)?;
+        progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+        Ok::<_, CatmapError>(())
+    })
 }
 
 /// Writes `scene.json` (the objects) and `gt_meshes/obj_{id}.ply` into `dir`, as both layouts have

@@ -18,21 +18,19 @@
 //! objects by geometry. The reader crops a border of `border_px` pixels, as it does ScanNet's.
 
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use image::ExtendedColorType;
 use image::codecs::jpeg::JpegEncoder;
-use rayon::prelude::*;
 
 use super::description::row_major;
 use super::render::RenderedFrame;
-use super::replica_writer::{DEPTH_SCALE, depth_to_units, write_ground_truth, write_png};
+use super::replica_writer::{DEPTH_SCALE, depth_to_units, write_all_frames, write_ground_truth, write_png};
 use super::scene::SyntheticScene;
 use crate::atomic_file::{write_atomic, write_atomic_with};
 use crate::dataset::FrameSource;
 use crate::dataset::class_names::{SCANNET_LABEL_MAP, replica_class_name};
 use crate::dataset::classes::is_replica_background;
-use crate::error::{CatmapError, Result};
+use crate::error::Result;
 
 /// JPEG quality of the colour images (SensReader's exports are JPEG).
 const JPEG_QUALITY: u8 = 95;
@@ -40,25 +38,21 @@ const JPEG_QUALITY: u8 = 95;
 /// Writes `scene` into `dir` (created if missing) in ScanNet's layout. `progress(done, total)` is
 /// called from worker threads after each frame. Errors name the file that failed.
 pub fn write_scannet_layout(scene: &SyntheticScene, dir: &Path, progress: impl Fn(usize, usize) + Sync) -> Result<()> {
-    for sub in [
-        "color",
-        "depth",
-        "pose",
-        "intrinsic",
-        "instance-filt",
-        "label-filt",
-        "gt_meshes",
-    ] {
-        let path = dir.join(sub);
-        std::fs::create_dir_all(&path).map_err(|e| CatmapError::io(path, e))?;
-    }
-    let total = scene.len();
-    let done = AtomicUsize::new(0);
-    (0..total).into_par_iter().try_for_each(|i| {
-        write_frame(dir, i, &scene.render(i)?)?;
-        progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-        Ok::<_, CatmapError>(())
-    })?;
+    write_all_frames(
+        scene,
+        dir,
+        &[
+            "color",
+            "depth",
+            "pose",
+            "intrinsic",
+            "instance-filt",
+            "label-filt",
+            "gt_meshes",
+        ],
+        progress,
+        |i, frame| write_frame(dir, i, frame),
+    )?;
     let k = scene.intrinsics();
     let intrinsic = format!("{} 0 {} 0\n0 {} {} 0\n0 0 1 0\n0 0 0 1\n", k.fx, k.cx, k.fy, k.cy);
     write_atomic(&dir.join("intrinsic/intrinsic_depth.txt"), intrinsic.as_bytes())?;

@@ -17,17 +17,14 @@
 //! three are not simultaneous, and a reader has to associate them by nearest timestamp.
 
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-use rayon::prelude::*;
 
 use super::render::RenderedFrame;
-use super::replica_writer::{FrameImages, write_frame_images, write_ground_truth, write_json};
+use super::replica_writer::{FrameImages, write_all_frames, write_frame_images, write_ground_truth, write_json};
 use super::scene::SyntheticScene;
 use crate::atomic_file::write_atomic;
 use crate::dataset::FrameSource;
 use crate::dataset::tum::TUM_DEPTH_SCALE;
-use crate::error::{CatmapError, Result};
+use crate::error::Result;
 
 /// Timestamp of the first colour image, seconds (a Unix time, as TUM's are).
 pub const START_S: f64 = 1_700_000_000.0;
@@ -54,17 +51,14 @@ fn pose_timestamp(i: usize) -> String {
 /// Writes `scene` into `dir` (created if missing) in TUM's layout. `progress(done, total)` is
 /// called from worker threads after each frame. Errors name the file that failed.
 pub fn write_tum_layout(scene: &SyntheticScene, dir: &Path, progress: impl Fn(usize, usize) + Sync) -> Result<()> {
-    for sub in ["rgb", "depth", "instance", "class", "gt_meshes"] {
-        let path = dir.join(sub);
-        std::fs::create_dir_all(&path).map_err(|e| CatmapError::io(path, e))?;
-    }
+    write_all_frames(
+        scene,
+        dir,
+        &["rgb", "depth", "instance", "class", "gt_meshes"],
+        progress,
+        |i, frame| write_frame(dir, i, frame),
+    )?;
     let total = scene.len();
-    let done = AtomicUsize::new(0);
-    (0..total).into_par_iter().try_for_each(|i| {
-        write_frame(dir, i, &scene.render(i)?)?;
-        progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-        Ok::<_, CatmapError>(())
-    })?;
     // The header lines of TUM's own files.
     let list = |title: &str, folder: &str, stamp: fn(usize) -> String| {
         let header = format!("# {title}\n# file: 'catmap synth'\n# timestamp filename\n");
