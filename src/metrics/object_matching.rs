@@ -6,9 +6,11 @@
 //! stream of the seed). A sample votes for the ground-truth object whose surface samples lie
 //! nearest, when within [`MATCH_DISTANCE_M`]; farther samples vote for none. A prediction's
 //! **purity** is its top object's share of its votes: how much of what it holds comes from one
-//! ground-truth object. Each ground-truth object is paired with the prediction that gave it the
-//! most votes among those whose top object it is (ties: the lower id); the other predictions are
-//! extra (duplicates, or objects the ground truth does not have).
+//! ground-truth object. A vote stands for its share of the prediction's surface area, so each
+//! ground-truth object is paired with the prediction whose surface lies on it over the largest
+//! area, among those whose top object it is (ties: the lower id): a whole object made with some
+//! stray surface outweighs a clean fragment of it. The other predictions are extra (duplicates,
+//! fragments, or objects the ground truth does not have).
 
 use std::collections::BTreeMap;
 
@@ -47,6 +49,8 @@ pub struct PredictionVotes {
     pub top: Option<ObjectId>,
     /// Votes for `top`.
     pub top_votes: usize,
+    /// Area of its surface that lies on `top` (its votes' share of its samples times its area), m².
+    pub top_area_m2: f32,
     /// Share of its voting samples that voted for `top` (0 when none voted).
     pub purity: f32,
 }
@@ -98,6 +102,7 @@ pub fn vote(
                     prediction: *id,
                     top: Some(truth),
                     top_votes: n,
+                    top_area_m2: n as f32 / samples.len() as f32 * mesh.area(),
                     purity: n as f32 / total as f32,
                 },
             }
@@ -110,18 +115,20 @@ fn no_votes(prediction: ObjectId) -> PredictionVotes {
         prediction,
         top: None,
         top_votes: 0,
+        top_area_m2: 0.0,
         purity: 0.0,
     }
 }
 
-/// Pairs each ground-truth object with the prediction that voted for it most (module doc).
+/// Pairs each ground-truth object with the prediction whose surface lies on it over the largest
+/// area (module doc).
 pub fn pair(votes: &[PredictionVotes]) -> GeometryPairing {
     let mut best: BTreeMap<ObjectId, &PredictionVotes> = BTreeMap::new();
     for v in votes {
         let Some(truth) = v.top else { continue };
-        let better = best
-            .get(&truth)
-            .is_none_or(|b| v.top_votes > b.top_votes || (v.top_votes == b.top_votes && v.prediction < b.prediction));
+        let better = best.get(&truth).is_none_or(|b| {
+            v.top_area_m2 > b.top_area_m2 || (v.top_area_m2 == b.top_area_m2 && v.prediction < b.prediction)
+        });
         if better {
             best.insert(truth, v);
         }
@@ -169,6 +176,26 @@ mod tests {
         let paired: Vec<(u32, u32)> = pairing.paired.iter().map(|(t, (p, _))| (t.0, p.0)).collect();
         assert_eq!(paired, [(1, 8), (2, 12), (3, 7)], "the whole box outvotes the half");
         assert_eq!(pairing.extra, [ObjectId(9), ObjectId(13)]);
+    }
+
+    #[test]
+    fn a_whole_object_with_stray_surface_outweighs_a_clean_fragment_of_it() {
+        let truths = boxes();
+        // A clean slab of object 3's top (every sample on it) and the whole object with as much
+        // surface again far from everything (half its samples vote).
+        let fragment = cuboid([4.0, 0.0, 0.68], [4.3, 0.3, 0.7]);
+        let stray = cuboid([4.0, 5.0, 0.0], [5.0, 6.0, 0.7]);
+        let whole = TriangleMesh::merged([&truths[2].1, &stray]);
+        let predictions = vec![(ObjectId(4), fragment), (ObjectId(6), whole)];
+        let votes = vote(&predictions, &truths, 2).expect("meshes sample");
+        assert_eq!(votes[0].purity, 1.0, "{votes:?}");
+        assert!(
+            votes[1].top_votes < votes[0].top_votes,
+            "more samples on the fragment: {votes:?}"
+        );
+        let pairing = pair(&votes);
+        assert_eq!(pairing.paired[&ObjectId(3)].0, ObjectId(6), "{votes:?}");
+        assert_eq!(pairing.extra, [ObjectId(4)]);
     }
 
     #[test]

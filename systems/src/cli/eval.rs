@@ -31,8 +31,9 @@ pub struct EvalArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// How predictions pair with ground-truth objects: by id (`obj_{id}.ply` against
-    /// `obj_{id}.ply`), or by geometry (each ground-truth object takes the prediction most of
-    /// whose surface lies on it: for runs with `--instances per-frame`, whose ids are their own).
+    /// `obj_{id}.ply`), or by geometry (each ground-truth object takes the prediction whose
+    /// surface lies on it over the largest area: for runs with `--instances per-frame`, whose ids
+    /// are their own).
     #[arg(long, value_enum, default_value_t = PairingArg::Id)]
     pub pairing: PairingArg,
     /// Surface samples per mesh (both the prediction's and the ground truth's). The paper's
