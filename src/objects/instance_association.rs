@@ -16,7 +16,12 @@
 //!   `min_overlap`): the mask spans two objects (a segmenter's merge) and is held back;
 //! - several masks may go to one object (a split object): the one of highest overlap, and any
 //!   other most of whose points lie on the object ([`SPLIT_MASK_OVERLAP`]); a mask below that is
-//!   decided again without the object (a neighbour the object's footprint reaches);
+//!   decided again without the object (a neighbour the object's footprint reaches). Of the masks
+//!   an object takes in a frame, the one of most points on it is its own: the voxels of the others
+//!   that it did not cover count against the object as another mask's would. An object its
+//!   segmenter splits now and then keeps them (its own masks cover them in most frames); an
+//!   object made of two that one mask covered in its first frames (adjacent in the image, metres
+//!   apart) lets the second go once frames showing them apart outnumber those;
 //! - a mask no object of its class takes but that an object of **another class** overlaps by at
 //!   least `confused_class_overlap` shows that object under a confused class (a segmenter's
 //!   occasional wrong class): it is held back and starts no candidate, so a few confused masks of
@@ -234,6 +239,16 @@ impl InstanceTracker {
                 }
             }
         }
+        // Of the masks an object takes, the one of most points on it is its own in this frame.
+        let mut own_mask: BTreeMap<ObjectId, (usize, f32)> = BTreeMap::new();
+        for (i, (d, overlap)) in decisions.iter().enumerate() {
+            if let Decision::Fate(MaskFate::Object(id)) = d {
+                let on = overlap * masks[i].points.len() as f32;
+                if own_mask.get(id).is_none_or(|&(_, most)| on > most) {
+                    own_mask.insert(*id, (i, on));
+                }
+            }
+        }
         let decisions: Vec<Decision> = decisions.into_iter().map(|(d, _)| d).collect();
         let keys: Vec<VoxelKeys> = masks.iter().map(|m| voxel_keys(&m.points, v)).collect();
         let owners: Vec<MaskOwners> = (decisions.iter())
@@ -285,10 +300,11 @@ impl InstanceTracker {
             self.candidates[slot].footprint.add(keys, frame);
             slots.push((m.local, slot));
         }
-        // Objects count this frame's masks: theirs for them, the others' against them. An object
-        // grows only into voxels no other object holds and no candidate of its class covers (what
-        // a mask that merged it with a neighbour adds is the neighbour's).
-        let counts: Vec<(ObjectId, VoxelKeys, VoxelKeys)> = (own.iter())
+        // Objects count this frame's own mask for them, every other mask (another object's, or a
+        // second one it took) against them. An object grows only into voxels no other object
+        // holds and no candidate of its class covers (what a mask that merged it with a neighbour
+        // adds is the neighbour's).
+        let counts: Vec<(ObjectId, VoxelKeys, VoxelKeys, VoxelKeys)> = (own.iter())
             .map(|(&id, own_keys)| {
                 let class = self.objects.get(&id).map(|f| f.class);
                 let claimed = |k: u64| {
@@ -302,18 +318,21 @@ impl InstanceTracker {
                 let grown: VoxelKeys = (own_keys.iter().copied())
                     .filter(|&k| footprint.is_some_and(|f| f.covers(k, Counted::Covered)) || !claimed(k))
                     .collect();
-                let others: VoxelKeys = (masks.iter().zip(&keys))
-                    .filter(|(m, _)| fates.get(&m.local) != Some(&MaskFate::Object(id)))
+                let own_index = own_mask.get(&id).map(|&(i, _)| i);
+                let others: VoxelKeys = (keys.iter().enumerate())
+                    .filter(|&(i, _)| Some(i) != own_index)
                     .flat_map(|(_, k)| k.iter().copied())
                     .collect();
-                (id, grown, others)
+                let own_mask_keys = own_index.map_or_else(|| own_keys.clone(), |i| keys[i].clone());
+                (id, grown, others, own_mask_keys)
             })
             .collect();
         let mut foreign = BTreeMap::new();
-        for (id, grown, others) in counts {
+        for (id, grown, others, own_mask_keys) in counts {
             if let Some(footprint) = self.objects.get_mut(&id) {
-                footprint.add(&grown, frame);
-                footprint.count_against(&others, &own[&id]);
+                let grown_by_own_mask: VoxelKeys = grown.intersection(&own_mask_keys).copied().collect();
+                footprint.add(&grown_by_own_mask, frame);
+                footprint.count_against(&others, &own_mask_keys);
             }
             let theirs: VoxelKeys = own[&id].difference(&grown).copied().collect();
             if !theirs.is_empty() {
