@@ -1,7 +1,8 @@
 //! Objects made twice merged: evidence per pair of frames apart and joined
-//! ([`crate::objects::pair_evidence`]).
+//! ([`crate::objects::pair_evidence`]); and the reverse, an object made of two that frames show
+//! apart (the masks an object takes in one frame: its own and the others).
 
-use super::tests::{chair_at, mask, object_of, seen_face, side_by_side};
+use super::tests::{CHAIR, chair_at, mask, object_of, seen_face, side_by_side};
 use super::*;
 
 const SOFA: ClassId = ClassId(30);
@@ -106,4 +107,55 @@ fn touching_chairs_a_segmenter_merges_in_a_run_of_frames_stay_two() {
         assert_eq!(frame.merges, [], "{t}");
     }
     assert_eq!(tracker.object_count(), 2);
+}
+
+#[test]
+fn an_object_made_of_two_chairs_merged_in_its_first_frames_lets_the_second_go_once_seen_apart() {
+    let cfg = AssociationConfig::default();
+    let mut tracker = InstanceTracker::default();
+    // Two chairs 2 m apart that one mask covered in the first three frames (adjacent in the image,
+    // one far behind the other): one object spans both.
+    let (a, b) = (chair_at(0.0), chair_at(2.0));
+    for t in 0..3 {
+        tracker.associate(FrameIndex(t), &side_by_side(t, a, b, true), &cfg);
+    }
+    assert_eq!(tracker.object_count(), 1);
+    let first = ObjectId(1);
+    // Then always apart: A's mask (the one of most points on the object) keeps the object, and
+    // every frame that gives it B's mask too counts against B's voxels, until B's mask is decided
+    // without it and becomes an object of its own.
+    let mut seen = Vec::new();
+    for t in 3..12 {
+        let fates = tracker.associate(FrameIndex(t), &side_by_side(t, a, b, false), &cfg);
+        seen.push((object_of(&fates, 10), object_of(&fates, 20)));
+    }
+    assert!(seen.iter().all(|&(x, _)| x == Some(first)), "{seen:?}");
+    let second = ObjectId(2);
+    assert_eq!(seen[seen.len() - 3..], [(Some(first), Some(second)); 3], "{seen:?}");
+    assert_eq!(tracker.object_count(), 2);
+}
+
+#[test]
+fn an_object_its_segmenter_splits_in_one_frame_of_four_stays_one() {
+    let cfg = AssociationConfig::default();
+    let mut tracker = InstanceTracker::default();
+    let (lo, hi) = chair_at(0.0);
+    let mut ids = BTreeSet::new();
+    for t in 0..24u64 {
+        let j = 0.01 * (t % 3) as f32;
+        let masks = match t % 4 == 3 {
+            true => vec![
+                mask(1, CHAIR, seen_face(lo, [0.0, 0.5, 0.9], j)),
+                mask(2, CHAIR, seen_face([0.02, 0.0, 0.0], hi, j)),
+            ],
+            false => vec![mask(1, CHAIR, seen_face(lo, hi, j))],
+        };
+        let fates = tracker.associate(FrameIndex(t), &masks, &cfg);
+        ids.extend(fates.values().filter_map(|f| match f {
+            MaskFate::Object(id) => Some(*id),
+            MaskFate::Held(_) => None,
+        }));
+    }
+    assert_eq!(ids, BTreeSet::from([ObjectId(1)]));
+    assert_eq!((tracker.object_count(), tracker.candidate_count()), (1, 0));
 }
