@@ -240,7 +240,7 @@ impl InstanceTracker {
             }
         }
         // Of the masks an object takes, the one of most points on it is its own in this frame.
-        let mut own_mask: BTreeMap<ObjectId, (usize, f32)> = BTreeMap::new();
+        let mut own_mask: BTreeMap<ObjectId, (usize, f32)> = BTreeMap::new(); // (mask, points on it)
         for (i, (d, overlap)) in decisions.iter().enumerate() {
             if let Decision::Fate(MaskFate::Object(id)) = d {
                 let on = overlap * masks[i].points.len() as f32;
@@ -304,8 +304,10 @@ impl InstanceTracker {
         // second one it took) against them. An object grows only into voxels no other object
         // holds and no candidate of its class covers (what a mask that merged it with a neighbour
         // adds is the neighbour's).
-        let counts: Vec<(ObjectId, VoxelKeys, VoxelKeys, VoxelKeys)> = (own.iter())
-            .map(|(&id, own_keys)| {
+        // Every object in `own` took a mask, so it has an own mask.
+        let counts: Vec<(ObjectId, VoxelKeys, VoxelKeys, usize)> = (own.iter())
+            .filter_map(|(&id, own_keys)| {
+                let &(own_index, _) = own_mask.get(&id)?;
                 let class = self.objects.get(&id).map(|f| f.class);
                 let claimed = |k: u64| {
                     self.objects
@@ -318,21 +320,20 @@ impl InstanceTracker {
                 let grown: VoxelKeys = (own_keys.iter().copied())
                     .filter(|&k| footprint.is_some_and(|f| f.covers(k, Counted::Covered)) || !claimed(k))
                     .collect();
-                let own_index = own_mask.get(&id).map(|&(i, _)| i);
                 let others: VoxelKeys = (keys.iter().enumerate())
-                    .filter(|&(i, _)| Some(i) != own_index)
+                    .filter(|&(i, _)| i != own_index)
                     .flat_map(|(_, k)| k.iter().copied())
                     .collect();
-                let own_mask_keys = own_index.map_or_else(|| own_keys.clone(), |i| keys[i].clone());
-                (id, grown, others, own_mask_keys)
+                Some((id, grown, others, own_index))
             })
             .collect();
         let mut foreign = BTreeMap::new();
-        for (id, grown, others, own_mask_keys) in counts {
+        for (id, grown, others, own_index) in counts {
             if let Some(footprint) = self.objects.get_mut(&id) {
-                let grown_by_own_mask: VoxelKeys = grown.intersection(&own_mask_keys).copied().collect();
+                let own_mask_keys = &keys[own_index];
+                let grown_by_own_mask: VoxelKeys = grown.intersection(own_mask_keys).copied().collect();
                 footprint.add(&grown_by_own_mask, frame);
-                footprint.count_against(&others, &own_mask_keys);
+                footprint.count_against(&others, own_mask_keys);
             }
             let theirs: VoxelKeys = own[&id].difference(&grown).copied().collect();
             if !theirs.is_empty() {
