@@ -10,6 +10,11 @@
 # "default:0 default:1 default:2 default:3 living:0 living:1"); FAMILIES: camera families of
 # `catmap synth --noise` (default "structured-light time-of-flight active-stereo"). Runs go one
 # after another; each prints its line as it ends, the table comes last (also WORK/table.md).
+#
+# MAPPER_SEEDS (environment, default "0"): the `catmap run --seed` values each scene is mapped
+# with. With more than one, each row is the mean over them and the last column the spread
+# (lowest–highest all-objects accuracy): the same data mapped with another seed moves a clean
+# run's accuracy by a few percent, more than a small change to the mapper does.
 set -euo pipefail
 catmap=$(realpath "$1"); work=$2; shift 2
 scenes=${1:-"default:0 default:1 default:2 default:3 living:0 living:1"}; [ $# -gt 0 ] && shift
@@ -29,33 +34,47 @@ for scene in $scenes; do
         "$catmap" synth --preset "$preset" --seed "$seed" --noise "$family" --ids per-frame --out "$dir" 2>/dev/null
       fi
     fi
-    if [ ! -f "$work/runs/$name/metrics.json" ]; then
-      "$catmap" run --dataset "$dir" --seed 0 --no-recording --out "$work/runs/$name" "$@" \
-        > "$work/logs/$name.txt" 2>&1 || { echo "$name: failed (log: $work/logs/$name.txt)"; continue; }
-    fi
-    rows+=("$name")
-    echo "$name done"
+    mapped=()
+    for mapper_seed in ${MAPPER_SEEDS:-0}; do
+      # Seed 0's run keeps the scene's name (runs made before the option are reused).
+      run=$name; [ "$mapper_seed" = 0 ] || run="${name}_m${mapper_seed}"
+      if [ ! -f "$work/runs/$run/metrics.json" ]; then
+        "$catmap" run --dataset "$dir" --seed "$mapper_seed" --no-recording --out "$work/runs/$run" "$@" \
+          > "$work/logs/$run.txt" 2>&1 || { echo "$run: failed (log: $work/logs/$run.txt)"; continue; }
+      fi
+      mapped+=("$run")
+      echo "$run done"
+    done
+    [ ${#mapped[@]} -gt 0 ] && rows+=("$name=$(IFS=,; echo "${mapped[*]}")")
   done
 done
 python3 - "$work" "${rows[@]}" <<'PY' | tee "$work/table.md"
 import json, sys
-work, names = sys.argv[1], sys.argv[2:]
-def load(name):
-    m = json.load(open(f"{work}/runs/{name}/metrics.json"))
-    s = json.load(open(f"{work}/runs/{name}/summary.json"))
-    truth = len(m["objects"])
-    return dict(truth=truth, predicted=len(s["objects"]), missing=m["mean"]["missing"], acc=m["mean"]["accuracy_cm"],
-                comp=m["mean"]["completion_cm"], cr5=m["mean"]["completion_ratio_5cm_pct"], seconds=s["total_seconds"],
-                choice=s.get("sensor", {}))
-runs = {n: load(n) for n in names}
-print("| scene | family | objects (truth) | missing | Acc. cm | Comp. cm | C.R. <5 cm % | Acc. / Comp. vs clean | C.R. vs clean (points) | probe: depth, masks, ids | s |")
-print("|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|")
-for name, r in runs.items():
+work, rows = sys.argv[1], sys.argv[2:]
+def load(run):
+    m = json.load(open(f"{work}/runs/{run}/metrics.json"))
+    s = json.load(open(f"{work}/runs/{run}/summary.json"))
+    return dict(truth=len(m["objects"]), predicted=len(s["objects"]), missing=m["mean"]["missing"],
+                acc=m["mean"]["accuracy_cm"], comp=m["mean"]["completion_cm"],
+                cr5=m["mean"]["completion_ratio_5cm_pct"], seconds=s["total_seconds"], choice=s.get("sensor", {}))
+def mean(runs):
+    avg = {k: sum(r[k] for r in runs) / len(runs) for k in ("predicted", "missing", "acc", "comp", "cr5", "seconds")}
+    accs = [r["acc"] for r in runs]
+    return dict(avg, truth=runs[0]["truth"], choice=runs[0]["choice"], seeds=len(runs), spread=(min(accs), max(accs)))
+scenes = {}
+for row in rows:
+    name, runs = row.split("=", 1)
+    scenes[name] = mean([load(run) for run in runs.split(",")])
+print("| scene | family | objects (truth) | missing | Acc. cm | Comp. cm | C.R. <5 cm % | Acc. / Comp. vs clean | C.R. vs clean (points) | probe: depth, masks, ids | s | mapper seeds: Acc. lowest–highest |")
+print("|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---|")
+for name, r in scenes.items():
     preset, seed, family = name.split("_", 2)
-    clean = runs.get(f"{preset}_{seed}_clean")
+    clean = scenes.get(f"{preset}_{seed}_clean")
     ratio = f"{r['acc']/clean['acc']-1:+.0%} / {r['comp']/clean['comp']-1:+.0%}" if clean else "–"
     points = f"{r['cr5']-clean['cr5']:+.1f}" if clean else "–"
     ch = r["choice"]
     probe = f"{ch.get('depth','?')}, {ch.get('masks','?')}, {ch.get('instances','?')}"
-    print(f"| {preset} {seed} | {family} | {r['predicted']} ({r['truth']}) | {r['missing']} | {r['acc']:.2f} | {r['comp']:.2f} | {r['cr5']:.1f} | {ratio} | {points} | {probe} | {r['seconds']:.0f} |")
+    spread = f"{r['seeds']}: {r['spread'][0]:.2f}–{r['spread'][1]:.2f}" if r["seeds"] > 1 else "1"
+    objects = f"{r['predicted']:g} ({r['truth']})"
+    print(f"| {preset} {seed} | {family} | {objects} | {r['missing']:g} | {r['acc']:.2f} | {r['comp']:.2f} | {r['cr5']:.1f} | {ratio} | {points} | {probe} | {r['seconds']:.0f} | {spread} |")
 PY
