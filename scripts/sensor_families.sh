@@ -61,8 +61,9 @@ def load(run):
     m = json.load(open(f"{work}/runs/{run}/metrics.json"))
     s = json.load(open(f"{work}/runs/{run}/summary.json"))
     share = {o["id"]: o.get("depth_share") for o in s["objects"]}
-    # Ground-truth objects whose paired prediction has a depth at most of its pixels (the run's
-    # LOW_DEPTH_SHARE, 0.5): what the camera measured, as opposed to what lay beyond its range.
+    # Ground-truth objects whose paired prediction has a depth at half its pixels or more (the
+    # run's LOW_DEPTH_SHARE, 0.5): what the camera measured, not what lay beyond its range. Their
+    # ratio to the clean run is taken per mapper seed (each seed's set may differ), then averaged.
     measured = {o["id"] for o in m["objects"]
                 if o.get("prediction") is not None and (share.get(o["prediction"]) or 0.0) >= 0.5}
     scores = {o["id"]: o["scores"] for o in m["objects"] if o.get("scores")}
