@@ -127,6 +127,14 @@ impl SyntheticScene {
         self
     }
 
+    /// The same scene seen through a camera `width` pixels wide: the preset's field of view and
+    /// aspect ratio (4:3, focal length 0.8 × width).
+    pub fn with_image_width(mut self, width: u32) -> Self {
+        let height = width * 3 / 4;
+        self.intrinsics = CameraIntrinsics::centred(width, height, 0.8 * width as f32);
+        self
+    }
+
     /// The imperfections its frames have.
     pub fn sensor(&self) -> SensorSettings {
         self.sensor

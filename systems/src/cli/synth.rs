@@ -40,6 +40,10 @@ pub struct SynthArgs {
     /// Instance ids: one per object over the sequence, or every frame its own.
     #[arg(long, value_enum, default_value_t = IdsArg::Consistent)]
     pub ids: IdsArg,
+    /// Image width in pixels (height three quarters of it, the preset's field of view); the
+    /// preset's own when not given (small 160, default and living 640).
+    #[arg(long)]
+    pub width: Option<u32>,
 }
 
 /// `--layout` values.
@@ -172,26 +176,31 @@ impl From<PresetArg> for Preset {
 
 /// Runs `catmap synth`.
 pub fn synth(args: &SynthArgs) -> anyhow::Result<()> {
-    write_scene_as(args.layout, args.seed, args.preset.into(), args.sensor(), &args.out)?;
+    write_scene_as(args.layout, args.seed, args.preset.into(), args.sensor(), args.width, &args.out)?;
     Ok(())
 }
 
 /// Generates and writes a scene in the Replica layout with a progress bar; returns it.
 pub fn write_scene(seed: u64, preset: Preset, sensor: SensorSettings, out: &Path) -> anyhow::Result<SyntheticScene> {
-    write_scene_as(LayoutArg::Replica, seed, preset, sensor, out)
+    write_scene_as(LayoutArg::Replica, seed, preset, sensor, None, out)
 }
 
-/// Generates and writes a scene in `layout` with a progress bar; returns it.
+/// Generates and writes a scene in `layout` (its images `width` pixels wide, else the preset's)
+/// with a progress bar; returns it.
 pub fn write_scene_as(
     layout: LayoutArg,
     seed: u64,
     preset: Preset,
     sensor: SensorSettings,
+    width: Option<u32>,
     out: &Path,
 ) -> anyhow::Result<SyntheticScene> {
-    let scene = SyntheticScene::generate(seed, preset)
+    let mut scene = SyntheticScene::generate(seed, preset)
         .context("cannot generate the synthetic scene")?
         .with_sensor(sensor);
+    if let Some(width) = width {
+        scene = scene.with_image_width(width);
+    }
     let progress = bar(0, "synth");
     let report = |done: usize, total: usize| {
         progress.set_length(total as u64);
