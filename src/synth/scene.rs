@@ -305,4 +305,28 @@ mod tests {
         // stands on the floor).
         assert!(first.values().all(|&f| f > 0.05 && f < 0.95), "fractions {first:?}");
     }
+
+    #[test]
+    fn a_wider_camera_sees_the_same_view_in_four_times_the_pixels() {
+        let small = SyntheticScene::generate(0, Preset::Small).expect("small scene");
+        let wide = SyntheticScene::generate(0, Preset::Small)
+            .expect("small scene")
+            .with_image_width(320);
+        let k = wide.intrinsics();
+        assert_eq!((k.width, k.height, k.fx, k.cx), (320, 240, 256.0, 159.5), "{k:?}");
+        let (a, b) = (
+            small.read_frame(15).expect("frame"),
+            wide.read_frame(15).expect("frame"),
+        );
+        let object_pixels = |f: &crate::sensor::frame::RgbdFrame| {
+            (0..f.instances.len())
+                .filter(|&i| f.instances.object_at(i).is_some())
+                .count() as f32
+        };
+        let ratio = object_pixels(&b) / object_pixels(&a);
+        assert!(
+            (3.6..4.4).contains(&ratio),
+            "twice the width, four times the object pixels: {ratio}"
+        );
+    }
 }

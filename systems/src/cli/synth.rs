@@ -176,7 +176,14 @@ impl From<PresetArg> for Preset {
 
 /// Runs `catmap synth`.
 pub fn synth(args: &SynthArgs) -> anyhow::Result<()> {
-    write_scene_as(args.layout, args.seed, args.preset.into(), args.sensor(), args.width, &args.out)?;
+    write_scene_as(
+        args.layout,
+        args.seed,
+        args.preset.into(),
+        args.sensor(),
+        args.width,
+        &args.out,
+    )?;
     Ok(())
 }
 

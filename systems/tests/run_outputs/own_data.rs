@@ -129,9 +129,16 @@ fn the_readmes_own_data_walk_through_maps_a_tum_layout_sequence_with_per_frame_m
     // walk-through at a camera's resolution") within the stated margins.
     let metrics = json(&out.join("metrics.json"));
     let mean = &metrics["mean"];
-    assert_eq!((&mean["objects"], &mean["missing"]), (&serde_json::json!(6), &serde_json::json!(0)), "{mean}");
+    assert_eq!(
+        (&mean["objects"], &mean["missing"]),
+        (&serde_json::json!(6), &serde_json::json!(0)),
+        "{mean}"
+    );
     let figure = |key: &str| mean[key].as_f64().unwrap_or(f64::NAN);
-    assert!(figure("completion_ratio_5cm_pct") >= WALK_THROUGH_CR_5CM_PCT - 1.0, "{mean}");
+    assert!(
+        figure("completion_ratio_5cm_pct") >= WALK_THROUGH_CR_5CM_PCT - 1.0,
+        "{mean}"
+    );
     assert!(figure("accuracy_cm") <= WALK_THROUGH_ACCURACY_CM * 1.05, "{mean}");
     let categories = json(&out.join("categories.json"));
     let chairs: Vec<usize> = (categories.as_array().into_iter().flatten())
