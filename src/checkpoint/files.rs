@@ -17,7 +17,7 @@ use crate::error::{CatmapError, Result};
 /// The manifest's file name.
 pub const MANIFEST: &str = "checkpoint.json";
 /// Format tag written to (and required in) the manifest.
-pub const FORMAT: &str = "catmap-checkpoint-4";
+pub const FORMAT: &str = "catmap-checkpoint-3";
 
 /// One file of a generation.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]

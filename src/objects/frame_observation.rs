@@ -5,7 +5,6 @@
 use std::collections::BTreeMap;
 
 use crate::ids::{ClassId, ObjectId};
-use crate::objects::candidate_sighting::CandidateSighting;
 use crate::objects::config::ObjectConfig;
 use crate::objects::instance_association::ObjectMerge;
 use crate::sensor::frame::{InstanceLabel, RgbdFrame};
@@ -35,9 +34,6 @@ pub struct FrameObservation {
     pub background_pixels: Vec<u32>,
     /// Objects the association found to be one in this frame (per-frame ids only).
     pub merges: Vec<ObjectMerge>,
-    /// Objects the association made of candidates in this frame, with what the candidates saw
-    /// before, in frame order (per-frame ids only).
-    pub promoted: BTreeMap<ObjectId, Vec<CandidateSighting>>,
 }
 
 /// Groups the pixels of `frame` by object and computes boxes and class votes.
@@ -95,7 +91,6 @@ pub fn observe_objects(frame: &RgbdFrame, cfg: &ObjectConfig) -> FrameObservatio
         ignored_small,
         background_pixels,
         merges: Vec::new(),
-        promoted: BTreeMap::new(),
     }
 }
 

@@ -30,9 +30,7 @@
 //!   `min_overlap`), else starts a new candidate. A candidate seen in `min_frames` frames becomes an
 //!   object with the next free id (1, 2, …); one not seen for `candidate_window_frames` frames is
 //!   forgotten, so a spurious mask never makes an object. A candidate that two masks of one frame
-//!   go to was two objects seen as one mask: it is dropped and each mask starts a candidate. A
-//!   held mask's view is kept by its candidate ([`CandidateSighting`]), and the object the
-//!   candidate becomes takes those views in ([`FrameAssociation::promoted`]);
+//!   go to was two objects seen as one mask: it is dropped and each mask starts a candidate;
 //! - a mask with fewer than `min_points` valid depth points is held back.
 //!
 //! An object's footprint grows only into voxels no other object holds and no candidate of its
@@ -54,7 +52,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::ids::{ClassId, FrameIndex, ObjectId};
 pub use crate::objects::association_config::{AssociationConfig, InstanceSource};
-pub use crate::objects::candidate_sighting::CandidateSighting;
 use crate::objects::mask_footprint::{Counted, Footprint, VoxelKeys, voxel_keys};
 pub use crate::objects::pair_evidence::ObjectMerge;
 use crate::objects::pair_evidence::{MaskOwners, PairLedger, merge_joined, pairs_shown};
@@ -94,12 +91,6 @@ pub struct FrameAssociation {
     pub foreign: BTreeMap<ObjectId, VoxelKeys>,
     /// Objects found to be one with another in this frame, in the order they were merged.
     pub merges: Vec<ObjectMerge>,
-    /// Masks held for a candidate, by their id in the frame: the candidate's key
-    /// ([`InstanceTracker::keep_sighting`] stores what they show).
-    pub held_for_candidates: BTreeMap<ObjectId, u64>,
-    /// Objects this frame made of candidates, with what those candidates saw before it, in frame
-    /// order.
-    pub promoted: BTreeMap<ObjectId, Vec<CandidateSighting>>,
 }
 
 /// What became of a mask.
@@ -114,12 +105,8 @@ pub enum MaskFate {
 /// A mask seen too few times yet.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 struct Candidate {
-    /// Its key, never given again.
-    key: u64,
     footprint: Footprint,
     frames: u32,
-    /// What its held masks showed, in frame order.
-    sightings: Vec<CandidateSighting>,
 }
 
 /// The association's memory (module doc); checkpointed with the map.
@@ -136,8 +123,6 @@ pub struct InstanceTracker {
     /// Every merge so far, in order.
     #[serde(default)]
     merges: Vec<ObjectMerge>,
-    /// The key the next candidate gets.
-    next_candidate_key: u64,
 }
 
 /// The best of `overlaps` (highest, then lowest key) and the second one if it rivals it.
@@ -306,12 +291,9 @@ impl InstanceTracker {
                 Decision::ToCandidate(i) if !contradicted.contains(&i) => i,
                 Decision::ToCandidate(_) | Decision::NewCandidate => {
                     self.candidates.push(Candidate {
-                        key: self.next_candidate_key,
                         footprint: Footprint::new(m.class),
                         frames: 0,
-                        sightings: Vec::new(),
                     });
-                    self.next_candidate_key += 1;
                     self.candidates.len() - 1
                 }
             };
@@ -372,20 +354,12 @@ impl InstanceTracker {
                 promoted.insert(slot, id);
             }
         }
-        let mut held_for_candidates = BTreeMap::new();
         for (local, slot) in slots {
-            let fate = match promoted.get(&slot) {
-                Some(&id) => MaskFate::Object(id),
-                None => {
-                    held_for_candidates.insert(local, self.candidates[slot].key);
-                    MaskFate::Held(HoldReason::Candidate)
-                }
-            };
+            let fate = promoted
+                .get(&slot)
+                .map_or(MaskFate::Held(HoldReason::Candidate), |&id| MaskFate::Object(id));
             fates.insert(local, fate);
         }
-        let mut promoted_sightings: BTreeMap<ObjectId, Vec<CandidateSighting>> = (promoted.iter())
-            .map(|(&slot, &id)| (id, std::mem::take(&mut self.candidates[slot].sightings)))
-            .collect();
         let mut slot = 0;
         self.candidates.retain(|_| {
             slot += 1;
@@ -401,9 +375,6 @@ impl InstanceTracker {
                     *fate = MaskFate::Object(merge.kept);
                 }
             }
-            if let Some(sightings) = promoted_sightings.remove(&merge.absorbed) {
-                promoted_sightings.entry(merge.kept).or_default().extend(sightings);
-            }
             let theirs = foreign.remove(&merge.absorbed).unwrap_or_default();
             let kept = foreign.entry(merge.kept).or_default();
             kept.extend(theirs);
@@ -413,28 +384,7 @@ impl InstanceTracker {
                 foreign.remove(&merge.kept);
             }
         }
-        promoted_sightings.retain(|_, sightings| !sightings.is_empty());
-        FrameAssociation {
-            fates,
-            foreign,
-            merges,
-            held_for_candidates,
-            promoted: promoted_sightings,
-        }
-    }
-
-    /// Whether an object's footprint holds the voxel `key` (of `voxel_m`): a candidate's mask
-    /// pixel there shows that object (a segmenter's merge), not the candidate.
-    pub fn held_by_an_object(&self, key: u64) -> bool {
-        self.objects.values().any(|f| f.covers(key, Counted::Holding))
-    }
-
-    /// Keeps what a mask held for the candidate `key` showed (a candidate forgotten since keeps
-    /// nothing).
-    pub fn keep_sighting(&mut self, key: u64, sighting: CandidateSighting) {
-        if let Some(candidate) = self.candidates.iter_mut().find(|c| c.key == key) {
-            candidate.sightings.push(sighting);
-        }
+        FrameAssociation { fates, foreign, merges }
     }
 }
 

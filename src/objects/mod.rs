@@ -3,7 +3,6 @@
 
 pub mod association_config;
 pub mod border_votes;
-pub mod candidate_sighting;
 pub mod cell_evidence;
 pub mod cell_rules;
 pub mod config;

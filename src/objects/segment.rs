@@ -8,7 +8,6 @@ use nalgebra::Point3;
 
 use crate::ids::ObjectId;
 use crate::objects::border_votes::{LabelHistory, vote_on_band};
-use crate::objects::candidate_sighting::candidate_sightings;
 use crate::objects::config::ObjectConfig;
 use crate::objects::frame_observation::{FrameObservation, observe_objects};
 use crate::objects::instance_association::{
@@ -117,26 +116,18 @@ pub fn segment_frame(
     });
     // With per-frame ids, the masks without their band are associated, and the frame before the
     // band relabelled.
-    let (labelled, merges, promoted) = match cfg.association.instances {
-        InstanceSource::Consistent => (None, Vec::new(), BTreeMap::new()),
+    let (labelled, merges) = match cfg.association.instances {
+        InstanceSource::Consistent => (None, Vec::new()),
         InstanceSource::PerFrame => {
             let bordered = band.as_ref().map(|band| with_band_unsure(base, band));
             let judged = bordered.as_ref().unwrap_or(base);
             let association = associate_masks(tracker, judged, &observe_objects(judged, cfg), cfg);
-            let finish = |f: RgbdFrame| {
-                band.as_ref()
-                    .map_or_else(|| f.clone(), |band| with_band_unsure(&f, band))
-            };
-            let voxel_m = cfg.association.voxel_m;
-            let claimed = |p: &Point3<f32>| tracker.held_by_an_object(voxel_key(p, voxel_m));
-            let held = &association.held_for_candidates;
-            let sightings = candidate_sightings(base, &association.fates, held, cfg, claimed, finish);
-            for (key, sighting) in sightings {
-                tracker.keep_sighting(key, sighting);
-            }
             let relabelled = relabel_instances(base, &association.fates);
-            let labelled = unsure_where_foreign(relabelled, &association, voxel_m);
-            (Some(labelled), association.merges, association.promoted)
+            let voxel_m = cfg.association.voxel_m;
+            (
+                Some(unsure_where_foreign(relabelled, &association, voxel_m)),
+                association.merges,
+            )
         }
     };
     let raw = labelled.as_ref().unwrap_or(base);
@@ -150,7 +141,6 @@ pub fn segment_frame(
     let changed = decided.or(labelled).or(trimmed);
     let observation = FrameObservation {
         merges,
-        promoted,
         ..observe_objects(changed.as_ref().unwrap_or(frame), cfg)
     };
     (changed, observation)

@@ -65,8 +65,7 @@ type ViewedObjects<'w, 's> = Query<
 >;
 
 /// Adds each new frame's view of an object: class votes (the class follows the majority),
-/// latest 2D box, visible-frame count, depth coverage and keyframe window; an object the frame
-/// made of a candidate first takes in the candidate's sightings, in frame order.
+/// latest 2D box, visible-frame count, depth coverage and keyframe window.
 pub fn record_object_views(
     settings: Res<Settings>,
     frames: Query<(&CameraFrame, &FrameObservations), Added<FrameObservations>>,
@@ -83,18 +82,6 @@ pub fn record_object_views(
                 tracing::warn!(object = %id, "observed object has no entity");
                 continue;
             };
-            let keyframes_cfg = &settings.0.keyframes;
-            // An object made of a candidate takes in what the candidate saw first.
-            for sighting in observations.0.promoted.get(id).into_iter().flatten() {
-                add_class_votes(&mut votes.0, &sighting.class_votes);
-                visible.0 += 1;
-                coverage.0.absorb(sighting.coverage);
-                let view = (sighting.view.clone()).with_depth_noise(settings.0.dataset.depth_noise_per_m2);
-                let role = KeyframeRole::Object;
-                keyframes
-                    .0
-                    .offer(sighting.frame(), view, role, keyframes_cfg, &mut rng.0);
-            }
             if let Some(majority) = add_class_votes(&mut votes.0, &observation.class_votes) {
                 class.set_if_neq(ObjectClass(majority));
             }
@@ -102,6 +89,7 @@ pub fn record_object_views(
             coverage.0.add(observation, &frame.0.depth_m);
             let view = ObjectView::crop(&frame.0, observation.sample_box, ViewOwner::Object(*id))
                 .with_depth_noise(settings.0.dataset.depth_noise_per_m2);
+            let keyframes_cfg = &settings.0.keyframes;
             let admission = keyframes
                 .0
                 .offer(frame.0.index, view, KeyframeRole::Object, keyframes_cfg, &mut rng.0);
