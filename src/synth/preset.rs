@@ -47,14 +47,13 @@ impl Preset {
         }
     }
 
-    /// Camera intrinsics: focal length 0.8 × width (≈ 64° horizontal field of view), centred
-    /// principal point.
+    /// Camera intrinsics: the preset's width (small 160, default and living 640) in
+    /// [`camera_of_width`].
     pub fn intrinsics(self) -> CameraIntrinsics {
-        let (width, height) = match self {
-            Self::Small => (160, 120),
-            Self::Default | Self::Living => (640, 480),
-        };
-        CameraIntrinsics::centred(width, height, 0.8 * width as f32)
+        camera_of_width(match self {
+            Self::Small => 160,
+            Self::Default | Self::Living => 640,
+        })
     }
 
     /// Number of frames of the trajectory.
@@ -151,6 +150,12 @@ impl FromStr for Preset {
             .find(|p| p.name() == s)
             .ok_or_else(|| CatmapError::Config(format!("unknown synthetic preset {s:?} (small, default, living)")))
     }
+}
+
+/// The synthetic camera `width` pixels wide: 4:3, focal length 0.8 × width (≈ 64° horizontal
+/// field of view), centred principal point.
+pub fn camera_of_width(width: u32) -> CameraIntrinsics {
+    CameraIntrinsics::centred(width, width * 3 / 4, 0.8 * width as f32)
 }
 
 #[cfg(test)]

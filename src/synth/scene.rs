@@ -127,11 +127,10 @@ impl SyntheticScene {
         self
     }
 
-    /// The same scene seen through a camera `width` pixels wide: the preset's field of view and
-    /// aspect ratio (4:3, focal length 0.8 × width).
+    /// The same scene seen through a camera `width` pixels wide, of the presets' field of view
+    /// ([`super::preset::camera_of_width`]).
     pub fn with_image_width(mut self, width: u32) -> Self {
-        let height = width * 3 / 4;
-        self.intrinsics = CameraIntrinsics::centred(width, height, 0.8 * width as f32);
+        self.intrinsics = super::preset::camera_of_width(width);
         self
     }
 
