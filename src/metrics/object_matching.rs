@@ -200,9 +200,15 @@ mod tests {
 
     #[test]
     fn a_prediction_spanning_two_objects_has_the_purity_of_its_larger_share() {
+        // Box 1 (0.5 × 0.5 × 0.9 m, 2.30 m² of surface) merged with box 3 (1 × 1 × 0.7 m,
+        // 4.80 m²): the prediction is box 3's, by 4.80 / 7.10 = 0.68 of its surface.
         let truths = boxes();
-        let merged = TriangleMesh::merged([&truths[0].1, &truths[1].1]);
+        let merged = TriangleMesh::merged([&truths[0].1, &truths[2].1]);
         let votes = vote(&[(ObjectId(5), merged)], &truths, 1).expect("meshes sample");
-        assert!((0.4..0.6).contains(&votes[0].purity), "{votes:?}");
+        assert_eq!(votes[0].top, Some(ObjectId(3)), "{votes:?}");
+        assert!((0.63..0.73).contains(&votes[0].purity), "{votes:?}");
+        let reversed = TriangleMesh::merged([&truths[2].1, &truths[0].1]);
+        let votes = vote(&[(ObjectId(5), reversed)], &truths, 1).expect("meshes sample");
+        assert_eq!(votes[0].top, Some(ObjectId(3)), "either order: {votes:?}");
     }
 }

@@ -290,6 +290,11 @@ mod tests {
 
     #[test]
     fn a_noisy_depth_a_few_centimetres_deep_does_not_see_the_objects_inside_free_with_the_allowance() {
+        // The allowance a depth camera's settings ship (`dataset.depth_noise_per_m2`).
+        let camera = crate::config::MapperConfig::default()
+            .with_depth_images(crate::sensor::depth_smoothing::DepthImages::Camera);
+        let allowance = camera.dataset.depth_noise_per_m2;
+        assert_eq!(allowance, 0.0025);
         // The surface is at 3.00 m; this view measured 3.05 m (noise). A point 2 cm inside.
         let inside = Point3::new(0.0, 0.0, 3.02);
         assert_eq!(
@@ -298,17 +303,25 @@ mod tests {
             "exact depth trusted"
         );
         assert_eq!(
-            view_evidence(&view(3.05, 0.005), &inside, 0.01),
+            view_evidence(&view(3.05, allowance), &inside, 0.01),
             ViewEvidence::AtObjectSurface,
-            "4.6 cm allowed at 3.05 m"
+            "2.3 cm allowed at 3.05 m, and the margin's 1 cm"
+        );
+        // 4 cm before the measurement is past the allowance and the margin (3.3 cm): seen free,
+        // as a table's space under its top is (twice the allowance, 5.7 cm, would not see it).
+        let before = Point3::new(0.0, 0.0, 3.01);
+        assert_eq!(view_evidence(&view(3.05, allowance), &before, 0.01), ViewEvidence::Free);
+        assert_eq!(
+            view_evidence(&view(3.05, 2.0 * allowance), &before, 0.01),
+            ViewEvidence::AtObjectSurface
         );
         // Space well before the surface is still seen free, and well behind it behind.
         assert_eq!(
-            view_evidence(&view(3.05, 0.005), &Point3::new(0.0, 0.0, 2.9), 0.01),
+            view_evidence(&view(3.05, allowance), &Point3::new(0.0, 0.0, 2.9), 0.01),
             ViewEvidence::Free
         );
         assert_eq!(
-            view_evidence(&view(3.05, 0.005), &Point3::new(0.0, 0.0, 3.2), 0.01),
+            view_evidence(&view(3.05, allowance), &Point3::new(0.0, 0.0, 3.1), 0.01),
             ViewEvidence::BehindObject
         );
     }

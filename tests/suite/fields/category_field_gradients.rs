@@ -6,7 +6,7 @@ use candle_core::DType;
 use catmap::field::category::ShapeCodes;
 use catmap::field::category::reference::category_reference;
 use catmap::field::reference::worst_tensor_error;
-use catmap::field::{AdamWConfig, Backend, CategoryBatch, CategoryField, CategorySamples, RaySamples};
+use catmap::field::{AdamWConfig, Backend, CHUNK_SAMPLES, CategoryBatch, CategoryField, CategorySamples, RaySamples};
 use catmap::ids::ObjectId;
 use catmap::objects::object_view::PixelState;
 use catmap::rng::{RngStream, seeded_rng};
@@ -118,6 +118,25 @@ fn rays_of_other_objects_last_skip_the_colour_branch_and_keep_the_gradients() {
                 CategorySamples { rays, members }
             })
             .collect();
+        for (c, s) in ordered.iter().enumerate() {
+            assert!(s.members.is_sorted(), "category {c}: members one after the other");
+            let reads: Vec<bool> = s.rays.states.iter().map(|p| p.reads_colour()).collect();
+            assert!(reads.is_sorted_by_key(|r| !r), "category {c}: colour rays first");
+            // The step's chunks (`CHUNK_SAMPLES` samples each): one runs the colour branch on a
+            // prefix and skips it on the rest, one skips it throughout.
+            let chunks: Vec<(usize, usize)> = reads
+                .chunks(CHUNK_SAMPLES / s.rays.samples_per_ray)
+                .map(|chunk| (chunk.iter().filter(|r| **r).count(), chunk.len()))
+                .collect();
+            assert!(
+                chunks.iter().any(|&(colour, len)| colour > 0 && colour < len),
+                "category {c}: a chunk ends in rays whose colour branch is skipped: {chunks:?}"
+            );
+            assert!(
+                chunks.iter().any(|&(colour, _)| colour == 0),
+                "category {c}: a chunk skips the colour branch throughout: {chunks:?}"
+            );
+        }
         check_samples_against_candle(&mut batch, &ordered, backend);
     }
 }
