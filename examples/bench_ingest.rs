@@ -99,7 +99,7 @@ fn main() -> anyhow::Result<()> {
         config.stream.channel_capacity,
     );
     let mut mapper = Mapper::with_inbox(config.clone(), stream.receiver.clone())?;
-    mapper.run(|_| ControlFlow::Continue(()));
+    mapper.run(|_| ControlFlow::Continue(()))?;
     stream.join();
     let seconds = started.elapsed().as_secs_f64();
     let stats = mapper.stream_stats().unwrap_or_default();
@@ -151,7 +151,7 @@ fn main() -> anyhow::Result<()> {
             next_report += args.rss_every;
         }
         ControlFlow::Continue(())
-    });
+    })?;
     stream.join();
     let stats = mapper.stream_stats().unwrap_or_default();
     let seconds = started.elapsed().as_secs_f64();

@@ -216,7 +216,7 @@ fn run(args: &Args) -> anyhow::Result<()> {
             let _ = select.ready_timeout(Duration::from_millis(100));
             continue;
         }
-        mapper.step();
+        mapper.step()?;
         let ingested = mapper.world().resource::<StreamProgress>().frames_ingested;
         // The mapper does not ingest while we look, so this is the reader's lead right now.
         let lead = produced.load(Ordering::SeqCst).saturating_sub(ingested as usize);

@@ -71,11 +71,11 @@ fn check_scene(seed: u64, args: &Args) -> anyhow::Result<(usize, usize)> {
     let mut mapper = Mapper::new(config)?;
     for position in (0..scene.len()).step_by(args.stride.max(1)) {
         mapper.push(scene.read_frame(position)?)?;
-        mapper.step();
+        mapper.step()?;
     }
-    mapper.end_stream();
-    mapper.step();
-    mapper.run(|_| ControlFlow::Continue(()));
+    mapper.end_stream()?;
+    mapper.step()?;
+    mapper.run(|_| ControlFlow::Continue(()))?;
     let observed = scene.observed_surface_fraction();
     let (mut above, mut groups) = (0, 0);
     for class in mapper.category_records() {

@@ -64,7 +64,7 @@ fn run(rec: &rerun::RecordingStream, args: &Args) -> anyhow::Result<()> {
     mapper.run(|progress| {
         tracing::debug!(phase = ?progress.phase, done = progress.done, "mapped");
         ControlFlow::Continue(())
-    });
+    })?;
     stream.join();
     let map = mapper.finish();
     tracing::info!(

@@ -43,7 +43,7 @@ fn run(args: &Args) -> anyhow::Result<()> {
         let frame = scene.read_frame(position)?;
         let index = frame.index;
         mapper.push(frame)?;
-        mapper.step();
+        mapper.step()?;
         let map = mapper.snapshot();
         let mut changes = Vec::new();
         for object in &map.objects {
@@ -67,8 +67,8 @@ fn run(args: &Args) -> anyhow::Result<()> {
             changes.join(", ")
         ));
     }
-    mapper.end_stream();
-    mapper.step();
+    mapper.end_stream()?;
+    mapper.step()?;
     let map = mapper.finish();
     say("\nobject  class        frames  points  box (m)");
     for o in &map.objects {

@@ -51,9 +51,90 @@ pub enum CatmapError {
         /// What is wrong.
         reason: String,
     },
-    /// A geometric computation got input it cannot work with.
-    #[error("degenerate input: {0}")]
-    Degenerate(String),
+    /// A tensor operation of candle failed.
+    #[error("tensor operation: {0}")]
+    Candle(#[from] candle_core::Error),
+    /// A named tensor could not be built or read.
+    #[error("tensor {name}: {source}")]
+    Tensor {
+        /// The tensor.
+        name: String,
+        /// The underlying error.
+        #[source]
+        source: candle_core::Error,
+    },
+    /// Tensors could not be encoded as safetensors.
+    #[error("cannot encode tensors: {0}")]
+    Encode(#[from] safetensors::SafeTensorError),
+    /// A named part (a tensor of a field, a checkpoint or a reference) is missing.
+    #[error("{part} is missing")]
+    MissingPart {
+        /// The part.
+        part: String,
+    },
+    /// Two things that must agree in size or shape do not.
+    #[error("{what}: expected {expected}, found {found}")]
+    ShapeMismatch {
+        /// What is mismatched.
+        what: String,
+        /// The size or shape wanted.
+        expected: String,
+        /// The size or shape given.
+        found: String,
+    },
+    /// An index names nothing (a category's member, a field of a batch).
+    #[error("{what} {index} does not exist (there are {len})")]
+    NoSuchIndex {
+        /// What is indexed.
+        what: &'static str,
+        /// The index given.
+        index: usize,
+        /// How many there are.
+        len: usize,
+    },
+    /// An input has too few points (or members, correspondences) for the computation.
+    #[error("{what}: {found}, at least {needed} needed")]
+    TooFew {
+        /// What is counted.
+        what: String,
+        /// The least the computation works with.
+        needed: usize,
+        /// How many there are.
+        found: usize,
+    },
+    /// A point set holds a NaN or infinite coordinate.
+    #[error("{what} has a NaN or infinite coordinate")]
+    NonFinitePoint {
+        /// The point set (and the point, where known).
+        what: String,
+    },
+    /// A value the computation needs positive (or finite, or bounded) is not.
+    #[error("{what} is {value}; it must {must}")]
+    BadValue {
+        /// The value's name.
+        what: &'static str,
+        /// The value.
+        value: String,
+        /// What it must be.
+        must: &'static str,
+    },
+    /// Two evaluations to compare are not of the same scene.
+    #[error("the two evaluations cover different objects; compare runs of the same scene")]
+    DifferentScenes,
+    /// The generator could not place a scene's objects in its room.
+    #[error("could not place {objects} objects in a {width_m:.1} × {depth_m:.1} m room")]
+    NoRoom {
+        /// Objects to place.
+        objects: usize,
+        /// The room's width.
+        width_m: f32,
+        /// The room's depth.
+        depth_m: f32,
+    },
+    /// The mapper's state broke an invariant it keeps (an entity without its component, a
+    /// field without its owner): a bug, never bad input.
+    #[error("broken invariant: {0}")]
+    Invariant(String),
 }
 
 impl CatmapError {
@@ -70,6 +151,44 @@ impl CatmapError {
         Self::Checkpoint {
             path: path.into(),
             reason: reason.into(),
+        }
+    }
+
+    /// A size or shape mismatch of `what`.
+    pub fn mismatch(what: impl Into<String>, expected: impl std::fmt::Display, found: impl std::fmt::Display) -> Self {
+        Self::ShapeMismatch {
+            what: what.into(),
+            expected: expected.to_string(),
+            found: found.to_string(),
+        }
+    }
+
+    /// `found` of `what` where the computation needs at least `needed`.
+    pub fn too_few(what: impl Into<String>, needed: usize, found: usize) -> Self {
+        Self::TooFew {
+            what: what.into(),
+            needed,
+            found,
+        }
+    }
+
+    /// The part `part` is missing.
+    pub fn missing(part: impl Into<String>) -> Self {
+        Self::MissingPart { part: part.into() }
+    }
+
+    /// Wraps a candle error with the tensor it concerns.
+    pub fn tensor(name: impl Into<String>) -> impl FnOnce(candle_core::Error) -> Self {
+        let name = name.into();
+        move |source| Self::Tensor { name, source }
+    }
+
+    /// `what` is `value` (printed with `{:?}`) but must `must`.
+    pub fn bad_value(what: &'static str, value: impl std::fmt::Debug, must: &'static str) -> Self {
+        Self::BadValue {
+            what,
+            value: format!("{value:?}"),
+            must,
         }
     }
 

@@ -82,9 +82,7 @@ pub fn aligned_member_frame(
     (min_extent, scale): (f32, MemberScale),
 ) -> Result<NocsFrame> {
     if cloud.is_empty() {
-        return Err(CatmapError::Degenerate(
-            "an aligned member needs at least one point".into(),
-        ));
+        return Err(CatmapError::too_few("points of an aligned member", 1, 0));
     }
     let rep_box = representative.world_from_nocs.isometry;
     // The member's box: the representative's box carried back to the member's pose.
@@ -105,7 +103,9 @@ pub fn aligned_member_frame(
 /// beside an armchair's feet made its frame 0.82 m deep for 0.70.
 fn symmetric_cover(world_from_box: &Isometry3<f32>, cloud: &[Point3<f32>]) -> Result<Vector3<f32>> {
     if cloud.iter().any(|p| !p.coords.iter().all(|c| c.is_finite())) {
-        return Err(CatmapError::Degenerate("non-finite point in an aligned cloud".into()));
+        return Err(CatmapError::NonFinitePoint {
+            what: "an aligned cloud".into(),
+        });
     }
     Ok(sides_in(world_from_box, cloud).map_or_else(Vector3::zeros, |(lo, hi)| (-lo).sup(&hi) * 2.0))
 }

@@ -60,10 +60,8 @@ impl TensorStore {
             .map(|((name, data), values)| {
                 TensorView::new(Dtype::F32, vec![values.len()], data).map(|view| (*name, view))
             })
-            .collect::<std::result::Result<Vec<_>, _>>()
-            .map_err(|e| CatmapError::Degenerate(format!("cannot encode tensors: {e}")))?;
-        safetensors::tensor::serialize(views, None)
-            .map_err(|e| CatmapError::Degenerate(format!("cannot encode tensors: {e}")))
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        Ok(safetensors::tensor::serialize(views, None)?)
     }
 
     /// Decodes a safetensors buffer read from `file` (every tensor must be 1-D `F32`).

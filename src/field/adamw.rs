@@ -58,16 +58,18 @@ pub(crate) fn scaled_optimisers(
     learning_rate_scales: &[f32],
 ) -> crate::Result<Vec<AdamWConfig>> {
     if learning_rate_scales.len() != active.len() {
-        return Err(crate::CatmapError::Degenerate(format!(
-            "{} fields to train but {} learning-rate scales",
+        return Err(crate::CatmapError::mismatch(
+            "learning-rate scales of the fields to train",
             active.len(),
-            learning_rate_scales.len()
-        )));
+            learning_rate_scales.len(),
+        ));
     }
     if let Some(bad) = learning_rate_scales.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
-        return Err(crate::CatmapError::Degenerate(format!(
-            "learning-rate scale {bad} is not a positive number"
-        )));
+        return Err(crate::CatmapError::bad_value(
+            "a learning-rate scale",
+            bad,
+            "be positive and finite",
+        ));
     }
     Ok(learning_rate_scales
         .iter()

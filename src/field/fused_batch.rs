@@ -228,19 +228,18 @@ impl<M: FusedModel> FusedBatch<M> {
     /// order; `self.grads[k]` belongs to field `active[k]`.
     fn compute_gradients(&mut self, active: &[usize], samples: &[M::Samples]) -> Result<Vec<M::Losses>> {
         if samples.len() != active.len() {
-            return Err(CatmapError::Degenerate(format!(
-                "{} {} to train but samples for {}",
+            return Err(CatmapError::mismatch(
+                format!("samples of the {} to train", M::NOUN),
                 active.len(),
-                M::NOUN,
-                samples.len()
-            )));
+                samples.len(),
+            ));
         }
         if active.windows(2).any(|w| w[0] >= w[1]) || active.last().is_some_and(|&i| i >= self.fields.len()) {
-            return Err(CatmapError::Degenerate(format!(
-                "{} indices {active:?} must ascend and lie below {}",
-                M::NOUN,
-                self.fields.len()
-            )));
+            return Err(CatmapError::mismatch(
+                format!("indices of the {} to train", M::NOUN),
+                format!("ascending, below {}", self.fields.len()),
+                format!("{active:?}"),
+            ));
         }
         let fields: Vec<&M::Field> = active.iter().map(|&i| &self.fields[i]).collect();
         for (s, field) in samples.iter().zip(&fields) {

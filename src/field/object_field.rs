@@ -56,10 +56,11 @@ impl OccupancyField {
     pub fn from_params(hidden: usize, scale: f32, params: Vec<f32>) -> Result<Self> {
         let want = ParamLayout::occupancy(hidden).len();
         if params.len() != want {
-            return Err(CatmapError::Degenerate(format!(
-                "field with H = {hidden} needs {want} parameters, got {}",
-                params.len()
-            )));
+            return Err(CatmapError::mismatch(
+                format!("parameters of a field with H = {hidden}"),
+                want,
+                params.len(),
+            ));
         }
         let adam = AdamWState::new(params.len());
         Ok(Self {
@@ -98,12 +99,11 @@ impl OccupancyField {
     /// Replaces the AdamW state (e.g. from a checkpoint); its moments must match the parameters.
     pub fn with_optimiser_state(mut self, adam: AdamWState) -> Result<Self> {
         if adam.m.len() != self.params.len() || adam.v.len() != self.params.len() {
-            return Err(CatmapError::Degenerate(format!(
-                "optimiser moments of {} / {} values for {} parameters",
-                adam.m.len(),
-                adam.v.len(),
-                self.params.len()
-            )));
+            return Err(CatmapError::mismatch(
+                "optimiser moments (m / v) of a field's parameters",
+                self.params.len(),
+                format!("{} / {}", adam.m.len(), adam.v.len()),
+            ));
         }
         self.adam = adam;
         Ok(self)

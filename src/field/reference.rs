@@ -16,10 +16,6 @@ use super::render::FREE_EPS;
 use super::samples::RaySamples;
 use crate::error::{CatmapError, Result};
 
-pub(crate) fn ce(e: candle_core::Error) -> CatmapError {
-    CatmapError::Degenerate(format!("candle: {e}"))
-}
-
 /// How far a gradient `got` (flat, in `layout` order) is from the reference `want`: the largest
 /// error of one tensor relative to that tensor's norm in `want` (or to 1 % of the whole
 /// gradient's norm, so that a tensor whose gradient nearly cancels — a one-element bias summed
@@ -80,25 +76,22 @@ pub(crate) fn vars(layout: &ParamLayout, params: &[f32], dtype: DType) -> Result
             } else {
                 t.shape.to_vec()
             };
-            let tensor = Tensor::from_slice(&params[t.range()], shape, &Device::Cpu)
-                .and_then(|x| x.to_dtype(dtype))
-                .map_err(ce)?;
-            Var::from_tensor(&tensor).map_err(ce)
+            let tensor = Tensor::from_slice(&params[t.range()], shape, &Device::Cpu).and_then(|x| x.to_dtype(dtype))?;
+            Var::from_tensor(&tensor).map_err(CatmapError::from)
         })
         .collect()
 }
 
 /// Gradients of every Var, flat in layout order (zeros where a tensor got none).
 pub(crate) fn flat_grads(layout: &ParamLayout, vars: &[Var], loss: &Tensor) -> Result<Vec<f64>> {
-    let grads = loss.backward().map_err(ce)?;
+    let grads = loss.backward()?;
     let mut out = vec![0.0; layout.len()];
     for (t, v) in layout.tensors().iter().zip(vars) {
         if let Some(g) = grads.get(v.as_tensor()) {
             let g = g
                 .flatten_all()
                 .and_then(|g| g.to_dtype(DType::F64))
-                .and_then(|g| g.to_vec1::<f64>())
-                .map_err(ce)?;
+                .and_then(|g| g.to_vec1::<f64>())?;
             out[t.range()].copy_from_slice(&g);
         }
     }
@@ -134,72 +127,54 @@ pub fn occupancy_reference(
             .iter()
             .position(|t| t.name == name)
             .map(|i| &vars[i])
-            .ok_or_else(|| CatmapError::Degenerate(format!("no tensor {name}")))
+            .ok_or_else(|| CatmapError::missing(format!("tensor {name}")))
     };
     let (r, s) = (rays.num_rays(), rays.samples_per_ray);
     let n = r * s;
     let build = || -> Result<(Tensor, Tensor, Tensor, Tensor, Tensor, Tensor, Tensor)> {
         let flat: Vec<f32> = rays.points.iter().flatten().copied().collect();
-        let pts = Tensor::from_slice(&flat, (n, 3), &Device::Cpu)
-            .and_then(|p| p.to_dtype(dtype))
-            .map_err(ce)?;
-        let xs = (pts / f64::from(scale)).map_err(ce)?;
-        let proj = xs
-            .matmul(&var("encoding.B")?.as_tensor().t().map_err(ce)?)
-            .map_err(ce)?;
+        let pts = Tensor::from_slice(&flat, (n, 3), &Device::Cpu).and_then(|p| p.to_dtype(dtype))?;
+        let xs = (pts / f64::from(scale))?;
+        let proj = xs.matmul(&var("encoding.B")?.as_tensor().t()?)?;
         let mut parts = vec![xs.clone()];
         for k in 0..NUM_BANDS {
             let f = std::f64::consts::PI * f64::from(1u32 << k);
-            parts.push((&proj * f).and_then(|x| x.sin()).map_err(ce)?);
+            parts.push((&proj * f).and_then(|x| x.sin())?);
         }
-        let emb = Tensor::cat(&parts, 1).map_err(ce)?;
+        let emb = Tensor::cat(&parts, 1)?;
         debug_assert_eq!(emb.dims(), [n, 3 + NUM_BANDS * NUM_DIRECTIONS]);
-        let geo = emb.narrow(1, 0, GEO_DIMS).map_err(ce)?;
-        let col = emb
-            .narrow(1, GEO_DIMS, emb.dim(1).map_err(ce)? - GEO_DIMS)
-            .map_err(ce)?;
+        let geo = emb.narrow(1, 0, GEO_DIMS)?;
+        let col = emb.narrow(1, GEO_DIMS, emb.dim(1)? - GEO_DIMS)?;
         let fc = |x: &Tensor, name: &str| -> Result<Tensor> {
-            linear(x, var(&format!("{name}.weight"))?, var(&format!("{name}.bias"))?).map_err(ce)
+            linear(x, var(&format!("{name}.weight"))?, var(&format!("{name}.bias"))?).map_err(CatmapError::from)
         };
-        let h1 = fc(&geo, "in_layer")?.relu().map_err(ce)?;
-        let h2 = fc(&h1, "mid1")?.relu().map_err(ce)?;
-        let h3 = fc(&Tensor::cat(&[&h2, &geo], 1).map_err(ce)?, "cat_layer")?
-            .relu()
-            .map_err(ce)?;
-        let h4 = fc(&h3, "mid2")?.relu().map_err(ce)?;
-        let alpha = (fc(&h4, "out_alpha")? * f64::from(ALPHA_SCALE)).map_err(ce)?;
-        let h5 = fc(&Tensor::cat(&[&h4, &col], 1).map_err(ce)?, "color_linear")?
-            .relu()
-            .map_err(ce)?;
-        let colour = sigmoid(&fc(&h5, "out_color")?)
-            .map_err(ce)?
-            .reshape((r, s, 3))
-            .map_err(ce)?;
-        let occ = sigmoid(&alpha).and_then(|o| o.reshape((r, s))).map_err(ce)?;
+        let h1 = fc(&geo, "in_layer")?.relu()?;
+        let h2 = fc(&h1, "mid1")?.relu()?;
+        let h3 = fc(&Tensor::cat(&[&h2, &geo], 1)?, "cat_layer")?.relu()?;
+        let h4 = fc(&h3, "mid2")?.relu()?;
+        let alpha = (fc(&h4, "out_alpha")? * f64::from(ALPHA_SCALE))?;
+        let h5 = fc(&Tensor::cat(&[&h4, &col], 1)?, "color_linear")?.relu()?;
+        let colour = sigmoid(&fc(&h5, "out_color")?)?.reshape((r, s, 3))?;
+        let occ = sigmoid(&alpha).and_then(|o| o.reshape((r, s)))?;
         // Transmittance by a running product over the samples of each ray.
-        let free = ((occ.neg().map_err(ce)? + 1.0).map_err(ce)? + f64::from(FREE_EPS)).map_err(ce)?;
-        let mut t_cols = vec![Tensor::ones((r, 1), dtype, &Device::Cpu).map_err(ce)?];
+        let free = ((occ.neg()? + 1.0)? + f64::from(FREE_EPS))?;
+        let mut t_cols = vec![Tensor::ones((r, 1), dtype, &Device::Cpu)?];
         for i in 1..s {
-            let prev = t_cols[i - 1].mul(&free.narrow(1, i - 1, 1).map_err(ce)?).map_err(ce)?;
+            let prev = t_cols[i - 1].mul(&free.narrow(1, i - 1, 1)?)?;
             t_cols.push(prev);
         }
-        let trans = Tensor::cat(&t_cols, 1).map_err(ce)?;
-        let w = occ.mul(&trans).map_err(ce)?;
+        let trans = Tensor::cat(&t_cols, 1)?;
+        let w = occ.mul(&trans)?;
         let zf: Vec<f64> = rays.z.iter().map(|v| f64::from(*v)).collect();
-        let z = column(&zf, dtype).and_then(|z| z.reshape((r, s))).map_err(ce)?;
-        let depth = w.mul(&z).and_then(|x| x.sum(1)).map_err(ce)?;
+        let z = column(&zf, dtype).and_then(|z| z.reshape((r, s)))?;
+        let depth = w.mul(&z).and_then(|x| x.sum(1))?;
         let rgb = w
             .unsqueeze(2)
             .and_then(|w| w.broadcast_mul(&colour))
-            .and_then(|x| x.sum(1))
-            .map_err(ce)?;
-        let opacity = w.sum(1).map_err(ce)?;
-        let diff = z.broadcast_sub(&depth.unsqueeze(1).map_err(ce)?).map_err(ce)?;
-        let var_z = w
-            .mul(&diff.sqr().map_err(ce)?)
-            .and_then(|x| x.sum(1))
-            .map_err(ce)?
-            .detach();
+            .and_then(|x| x.sum(1))?;
+        let opacity = w.sum(1)?;
+        let diff = z.broadcast_sub(&depth.unsqueeze(1)?)?;
+        let var_z = w.mul(&diff.sqr()?).and_then(|x| x.sum(1))?.detach();
         Ok((depth, rgb, opacity, var_z, w, trans, occ))
     };
     let (depth, rgb, opacity, var_z, _, _, occ) = build()?;
@@ -230,32 +205,21 @@ pub fn occupancy_reference(
     let mean = |masked: Tensor, mask: &[f64]| -> Result<Tensor> {
         let count: f64 = mask.iter().sum();
         let factor = if count == 0.0 { 0.0 } else { 1.0 / (count + 1e-10) };
-        (masked.sum_all().map_err(ce)? * factor).map_err(ce)
+        (masked.sum_all()? * factor).map_err(CatmapError::from)
     };
     let l_depth = {
-        let res = depth
-            .sub(&column(&gt_d, dtype).map_err(ce)?)
-            .and_then(|x| x.abs())
-            .map_err(ce)?;
-        let info = (var_z.sqrt().map_err(ce)? + f64::from(DEPTH_STD_EPS))
-            .and_then(|x| x.recip())
-            .map_err(ce)?;
-        mean(
-            res.mul(&info).and_then(|x| x.mul(&column(&md, dtype)?)).map_err(ce)?,
-            &md,
-        )?
+        let res = depth.sub(&column(&gt_d, dtype)?).and_then(|x| x.abs())?;
+        let info = (var_z.sqrt()? + f64::from(DEPTH_STD_EPS)).and_then(|x| x.recip())?;
+        mean(res.mul(&info).and_then(|x| x.mul(&column(&md, dtype)?))?, &md)?
     };
     let l_colour = {
-        let gt = column(&gt_c, dtype).and_then(|c| c.reshape((r, 3))).map_err(ce)?;
-        let res = rgb.sub(&gt).and_then(|x| x.abs()).and_then(|x| x.sum(1)).map_err(ce)?;
-        mean(res.mul(&column(&obj, dtype).map_err(ce)?).map_err(ce)?, &obj)?
+        let gt = column(&gt_c, dtype).and_then(|c| c.reshape((r, 3)))?;
+        let res = rgb.sub(&gt).and_then(|x| x.abs()).and_then(|x| x.sum(1))?;
+        mean(res.mul(&column(&obj, dtype)?)?, &obj)?
     };
     let l_opacity = {
-        let res = opacity
-            .sub(&column(&this, dtype).map_err(ce)?)
-            .and_then(|x| x.abs())
-            .map_err(ce)?;
-        mean(res.mul(&column(&known, dtype).map_err(ce)?).map_err(ce)?, &known)?
+        let res = opacity.sub(&column(&this, dtype)?).and_then(|x| x.abs())?;
+        mean(res.mul(&column(&known, dtype)?)?, &known)?
     };
     let l_solid = {
         let mask_of = |target: f32| -> Vec<f64> {
@@ -266,28 +230,32 @@ pub fn occupancy_reference(
         };
         let (solid, empty) = (mask_of(1.0), mask_of(0.0));
         let prior: Vec<f64> = solid.iter().zip(&empty).map(|(a, b)| a + b).collect();
-        let tensor = |m: &[f64]| column(m, dtype).and_then(|m| m.reshape((r, s))).map_err(ce);
+        let tensor = |m: &[f64]| {
+            column(m, dtype)
+                .and_then(|m| m.reshape((r, s)))
+                .map_err(CatmapError::from)
+        };
         let (solid_mask, empty_mask) = (tensor(&solid)?, tensor(&empty)?);
-        let neg_ln_solid = occ
-            .log()
-            .and_then(|x| x.neg())
-            .and_then(|x| x.mul(&solid_mask))
-            .map_err(ce)?;
-        let neg_ln_empty = (occ.neg().map_err(ce)? + 1.0)
+        let neg_ln_solid = occ.log().and_then(|x| x.neg()).and_then(|x| x.mul(&solid_mask))?;
+        let neg_ln_empty = (occ.neg()? + 1.0)
             .and_then(|x| x.log())
             .and_then(|x| x.neg())
-            .and_then(|x| x.mul(&empty_mask))
-            .map_err(ce)?;
-        mean((neg_ln_solid + neg_ln_empty).map_err(ce)?, &prior)?
+            .and_then(|x| x.mul(&empty_mask))?;
+        mean((neg_ln_solid + neg_ln_empty)?, &prior)?
     };
-    let total = (((&l_depth + (&l_colour * f64::from(COLOUR_WEIGHT)).map_err(ce)?).map_err(ce)?
-        + (&l_opacity * f64::from(OPACITY_WEIGHT)).map_err(ce)?)
-    .map_err(ce)?
-        + (&l_solid * f64::from(rays.solid_weight)).map_err(ce)?)
-    .map_err(ce)?;
-    let scalar = |t: &Tensor| t.to_dtype(DType::F64).and_then(|t| t.to_scalar::<f64>()).map_err(ce);
-    let vec1 = |t: &Tensor| t.to_dtype(DType::F64).and_then(|t| t.to_vec1::<f64>()).map_err(ce);
-    let rgb2 = rgb.to_dtype(DType::F64).and_then(|t| t.to_vec2::<f64>()).map_err(ce)?;
+    let total = (((&l_depth + (&l_colour * f64::from(COLOUR_WEIGHT))?)? + (&l_opacity * f64::from(OPACITY_WEIGHT))?)?
+        + (&l_solid * f64::from(rays.solid_weight))?)?;
+    let scalar = |t: &Tensor| {
+        t.to_dtype(DType::F64)
+            .and_then(|t| t.to_scalar::<f64>())
+            .map_err(CatmapError::from)
+    };
+    let vec1 = |t: &Tensor| {
+        t.to_dtype(DType::F64)
+            .and_then(|t| t.to_vec1::<f64>())
+            .map_err(CatmapError::from)
+    };
+    let rgb2 = rgb.to_dtype(DType::F64).and_then(|t| t.to_vec2::<f64>())?;
     Ok(ReferenceOutput {
         total: scalar(&total)?,
         depth: scalar(&l_depth)?,

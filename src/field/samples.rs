@@ -64,15 +64,22 @@ impl RaySamples {
         if ok {
             Ok(())
         } else {
-            Err(CatmapError::Degenerate(format!(
-                "ray samples: {} rays × {} samples, but {} points, {} depths, {} colours, {} states",
-                rays,
-                self.samples_per_ray,
-                self.points.len(),
-                self.z.len(),
-                self.rgb.len(),
-                self.states.len()
-            )))
+            Err(CatmapError::mismatch(
+                "ray samples (points, depths, colours, states)",
+                format!(
+                    "{rays} rays × {} samples (> 0): {}, {}, {rays}, {rays}",
+                    self.samples_per_ray,
+                    rays * self.samples_per_ray,
+                    rays * self.samples_per_ray
+                ),
+                format!(
+                    "{}, {}, {}, {}",
+                    self.points.len(),
+                    self.z.len(),
+                    self.rgb.len(),
+                    self.states.len()
+                ),
+            ))
         }
     }
 }

@@ -16,7 +16,7 @@ impl OccupancyField {
             .iter()
             .map(|t| {
                 let tensor = Tensor::from_slice(&params[t.range()], (t.shape[0], t.shape[1]), &Device::Cpu)
-                    .map_err(|e| CatmapError::Degenerate(format!("tensor {}: {e}", t.name)))?;
+                    .map_err(CatmapError::tensor(&t.name))?;
                 Ok((t.name.clone(), tensor))
             })
             .collect()
@@ -31,19 +31,18 @@ impl OccupancyField {
             let (_, tensor) = tensors
                 .iter()
                 .find(|(name, _)| *name == spec.name)
-                .ok_or_else(|| CatmapError::Degenerate(format!("tensor {} is missing", spec.name)))?;
+                .ok_or_else(|| CatmapError::missing(format!("tensor {}", spec.name)))?;
             if tensor.dims() != [spec.shape[0], spec.shape[1]] {
-                return Err(CatmapError::Degenerate(format!(
-                    "tensor {} has shape {:?}, expected {:?}",
-                    spec.name,
-                    tensor.dims(),
-                    spec.shape
-                )));
+                return Err(CatmapError::mismatch(
+                    format!("shape of tensor {}", spec.name),
+                    format!("{:?}", spec.shape),
+                    format!("{:?}", tensor.dims()),
+                ));
             }
             let values = tensor
                 .flatten_all()
                 .and_then(|t| t.to_vec1::<f32>())
-                .map_err(|e| CatmapError::Degenerate(format!("tensor {}: {e}", spec.name)))?;
+                .map_err(CatmapError::tensor(&spec.name))?;
             params[spec.range()].copy_from_slice(&values);
         }
         Self::from_params(hidden, scale, params)

@@ -26,16 +26,16 @@ impl PointIndex {
     /// Indexes `points`. Errors on an empty or non-finite set.
     pub fn new(points: &[Point3<f32>]) -> Result<Self> {
         if points.is_empty() {
-            return Err(CatmapError::Degenerate("cannot index an empty point set".to_owned()));
+            return Err(CatmapError::too_few("points to index", 1, 0));
         }
         if points.iter().any(|p| !p.coords.iter().all(|x| x.is_finite())) {
-            return Err(CatmapError::Degenerate(
-                "point set has a NaN or infinite coordinate".to_owned(),
-            ));
+            return Err(CatmapError::NonFinitePoint {
+                what: "a point set to index".into(),
+            });
         }
         let raw: Vec<[f32; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
         let tree = ImmutableKdTree::new_from_slice(&raw)
-            .map_err(|e| CatmapError::Degenerate(format!("cannot build a k-d tree: {e:?}")))?;
+            .map_err(|e| CatmapError::Invariant(format!("cannot build a k-d tree of finite points: {e:?}")))?;
         Ok(Self { tree, points: raw })
     }
 

@@ -116,12 +116,13 @@ pub fn fit_minimum_volume_box(points: &[Point3<f32>]) -> Result<OrientedBox> {
 
 /// The mean of `points` and the points about it; errors on an empty or non-finite cloud.
 pub(super) fn centred_cloud(points: &[Point3<f32>]) -> Result<(Vector3<f64>, Vec<Vector3<f64>>)> {
-    let degenerate = |why: &str| Err(CatmapError::Degenerate(why.to_owned()));
     if points.is_empty() {
-        return degenerate("cannot fit a box to an empty point cloud");
+        return Err(CatmapError::too_few("points to fit a box to", 1, 0));
     }
     if points.iter().any(|p| !p.coords.iter().all(|x| x.is_finite())) {
-        return degenerate("point cloud has a NaN or infinite coordinate");
+        return Err(CatmapError::NonFinitePoint {
+            what: "a cloud to fit a box to".into(),
+        });
     }
     let mean = points
         .iter()

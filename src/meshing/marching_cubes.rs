@@ -40,12 +40,11 @@ const SPREAD: [u8; 16] = {
 /// Errors when the grid is invalid or `values` has the wrong length.
 pub fn marching_cubes(values: &[f32], grid: &SampleGrid, iso: f32) -> Result<TriangleMesh> {
     if values.len() != grid.len() {
-        return Err(CatmapError::Degenerate(format!(
-            "{} values for a grid of {:?} = {} samples",
+        return Err(CatmapError::mismatch(
+            format!("values of a {:?} grid", grid.dims),
+            grid.len(),
             values.len(),
-            grid.dims,
-            grid.len()
-        )));
+        ));
     }
     let mut extractor = IsoSurfaceExtractor::new(*grid, iso)?;
     for layer in values.chunks_exact(grid.layer_len()) {
@@ -106,7 +105,7 @@ impl IsoSurfaceExtractor {
     pub fn new(grid: SampleGrid, iso: f32) -> Result<Self> {
         grid.validate()?;
         if !iso.is_finite() {
-            return Err(CatmapError::Degenerate(format!("iso level {iso} is not finite")));
+            return Err(CatmapError::bad_value("the iso level", iso, "be finite"));
         }
         let padded = [grid.dims[0] + 2, grid.dims[1] + 2];
         let len = padded[0] * padded[1];
@@ -139,18 +138,18 @@ impl IsoSurfaceExtractor {
     /// Adds the next z-layer (`nx·ny` values, x fastest) and meshes the cubes below it.
     pub fn push_layer(&mut self, values: &[f32]) -> Result<()> {
         if self.below_z >= self.grid.dims[2] {
-            return Err(CatmapError::Degenerate(format!(
-                "grid has only {} z-layers",
-                self.grid.dims[2]
-            )));
+            return Err(CatmapError::mismatch(
+                "z-layers pushed to the extractor",
+                format!("at most {}", self.grid.dims[2]),
+                self.below_z + 1,
+            ));
         }
         if values.len() != self.grid.layer_len() {
-            return Err(CatmapError::Degenerate(format!(
-                "a z-layer of a {:?} grid has {} values, got {}",
-                self.grid.dims,
+            return Err(CatmapError::mismatch(
+                format!("values of a z-layer of a {:?} grid", self.grid.dims),
                 self.grid.layer_len(),
-                values.len()
-            )));
+                values.len(),
+            ));
         }
         let (nx, px) = (self.grid.dims[0], self.padded[0]);
         let above = &mut self.above;
@@ -171,10 +170,11 @@ impl IsoSurfaceExtractor {
     /// Errors when fewer than `nz` layers were pushed.
     pub fn finish(mut self) -> Result<TriangleMesh> {
         if self.below_z != self.grid.dims[2] {
-            return Err(CatmapError::Degenerate(format!(
-                "{} of {} z-layers were pushed",
-                self.below_z, self.grid.dims[2]
-            )));
+            return Err(CatmapError::mismatch(
+                "z-layers pushed to the extractor",
+                self.grid.dims[2],
+                self.below_z,
+            ));
         }
         self.above = Layer::padding(self.padded[0] * self.padded[1]);
         self.march_cube_layer();

@@ -121,15 +121,18 @@ impl ObjectGrid {
     pub fn new(frame: &ObjectFrame, config: &ObjectMeshConfig) -> Result<Self> {
         let scale = frame.world_from_object.scaling();
         if !(scale.is_finite() && scale > 0.0) {
-            return Err(CatmapError::Degenerate(format!(
-                "object scale {scale} must be positive"
-            )));
+            return Err(CatmapError::bad_value(
+                "an object's scale",
+                scale,
+                "be positive and finite",
+            ));
         }
         if !frame.extents.iter().all(|e| e.is_finite() && *e > 0.0) {
-            return Err(CatmapError::Degenerate(format!(
-                "object extents {:?} must be positive",
-                frame.extents
-            )));
+            return Err(CatmapError::bad_value(
+                "an object's extents",
+                frame.extents,
+                "be positive and finite",
+            ));
         }
         if !(config.voxel_size_m.is_finite() && config.voxel_size_m > 0.0) {
             return Err(CatmapError::Config(format!(
@@ -190,11 +193,11 @@ pub fn extract_object_mesh(
         let world: Vec<Point3<f32>> = points.iter().map(|p| object_grid.world_from_grid * *p).collect();
         let values = occupancy_at(&world);
         if values.len() != world.len() {
-            return Err(CatmapError::Degenerate(format!(
-                "occupancy callback returned {} values for {} points",
+            return Err(CatmapError::mismatch(
+                "occupancy values of the points asked",
+                world.len(),
                 values.len(),
-                world.len()
-            )));
+            ));
         }
         Ok(values)
     };
@@ -230,11 +233,11 @@ pub fn paint_vertices(mesh: &mut TriangleMesh, mut color_at: impl FnMut(&[Point3
     for batch in mesh.vertices.chunks(COLOR_BATCH) {
         let painted = color_at(batch);
         if painted.len() != batch.len() {
-            return Err(CatmapError::Degenerate(format!(
-                "colour callback returned {} colours for {} vertices",
+            return Err(CatmapError::mismatch(
+                "colours of the vertices asked",
+                batch.len(),
                 painted.len(),
-                batch.len()
-            )));
+            ));
         }
         colors.extend(painted);
     }

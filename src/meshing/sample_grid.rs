@@ -63,28 +63,32 @@ impl SampleGrid {
     /// Checks that the spacing is positive and finite, the origin finite and the grid not empty.
     pub fn validate(&self) -> Result<()> {
         if self.is_empty() {
-            return Err(CatmapError::Degenerate(format!(
-                "sample grid of {:?} samples is empty",
-                self.dims
-            )));
+            return Err(CatmapError::bad_value(
+                "the dimensions of a sample grid",
+                self.dims,
+                "be at least 1 on every axis",
+            ));
         }
         if !self.voxel_size.iter().all(|v| v.is_finite() && *v > 0.0) {
-            return Err(CatmapError::Degenerate(format!(
-                "voxel size {:?} must be positive and finite",
-                self.voxel_size
-            )));
+            return Err(CatmapError::bad_value(
+                "a sample grid's voxel size",
+                self.voxel_size,
+                "be positive and finite",
+            ));
         }
         if !self.origin.coords.iter().all(|v| v.is_finite()) {
-            return Err(CatmapError::Degenerate(format!(
-                "grid origin {:?} is not finite",
-                self.origin
-            )));
+            return Err(CatmapError::bad_value(
+                "a sample grid's origin",
+                self.origin,
+                "be finite",
+            ));
         }
         if u32::try_from(self.len()).is_err() {
-            return Err(CatmapError::Degenerate(format!(
-                "sample grid of {:?} samples is too large",
-                self.dims
-            )));
+            return Err(CatmapError::bad_value(
+                "the dimensions of a sample grid",
+                self.dims,
+                "hold fewer than 2³² samples",
+            ));
         }
         Ok(())
     }

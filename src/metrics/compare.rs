@@ -16,9 +16,7 @@ pub type ComparedGroups = Vec<(String, MetricSummary, MetricSummary)>;
 pub fn compare_groups(a: &EvaluationReport, b: &EvaluationReport) -> Result<ComparedGroups> {
     let ids = |r: &EvaluationReport| r.objects.iter().map(|o| o.id).collect::<Vec<_>>();
     if ids(a) != ids(b) {
-        return Err(CatmapError::Degenerate(
-            "the two evaluations cover different objects; compare runs of the same scene".into(),
-        ));
+        return Err(CatmapError::DifferentScenes);
     }
     let repeated =
         |r: &EvaluationReport, o: &ObjectMetrics| r.classes.get(&o.class_name).is_some_and(|c| c.objects > 1);

@@ -268,10 +268,11 @@ pub fn fit_box_to_points(shape: Vec<Point3<f32>>, cfg: &ObjectConfig) -> Result<
 /// (and smoothed) cloud searched now (along the box's axes first) or the one given kept.
 pub fn fit_object_bounds(cloud: &ObservedCloud, mirror: MirrorStep, cfg: &ObjectConfig) -> Result<FittedBounds> {
     if cloud.len() < MIN_POINTS_FOR_BOX {
-        return Err(CatmapError::Degenerate(format!(
-            "{} observed points, at least {MIN_POINTS_FOR_BOX} needed for a box",
-            cloud.len()
-        )));
+        return Err(CatmapError::too_few(
+            "observed points for a box",
+            MIN_POINTS_FOR_BOX,
+            cloud.len(),
+        ));
     }
     let (oriented_box, thinned) = fit_box_to_points(shape_points(cloud, cfg.shape_rule()), cfg)?;
     let mirror = match mirror {

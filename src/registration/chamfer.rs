@@ -22,10 +22,11 @@ pub fn one_way_chamfer(from: &[Point3<f32>], to: &[Point3<f32>]) -> Result<f32> 
 pub fn normalised_one_way_chamfer(from: &[Point3<f32>], to: &[Point3<f32>]) -> Result<f32> {
     let scale = half_max_extent(from);
     if scale.is_nan() || scale <= 0.0 {
-        return Err(CatmapError::Degenerate(format!(
-            "chamfer query cloud of {} points has no extent",
-            from.len()
-        )));
+        return Err(CatmapError::bad_value(
+            "the half extent of a chamfer query cloud",
+            scale,
+            "be positive",
+        ));
     }
     Ok(one_way_chamfer(from, to)? / scale)
 }

@@ -9,15 +9,16 @@ use crate::objects::observed_cloud::voxel_downsample;
 /// in the message ("source", "template").
 pub fn check_cloud(points: &[Point3<f32>], what: &str, min_points: usize) -> Result<()> {
     if points.len() < min_points {
-        return Err(CatmapError::Degenerate(format!(
-            "{what} cloud has {} points, registration needs at least {min_points}",
-            points.len()
-        )));
+        return Err(CatmapError::too_few(
+            format!("points of the {what} cloud to register"),
+            min_points,
+            points.len(),
+        ));
     }
     if let Some(i) = points.iter().position(|p| !p.coords.iter().all(|x| x.is_finite())) {
-        return Err(CatmapError::Degenerate(format!(
-            "{what} cloud point {i} has a NaN or infinite coordinate"
-        )));
+        return Err(CatmapError::NonFinitePoint {
+            what: format!("{what} cloud point {i}"),
+        });
     }
     Ok(())
 }

@@ -43,11 +43,14 @@ pub fn robust_registration(
     let graph = consistency_graph(source, template, correspondences, cfg.noise_bound_m);
     let clique = maximum_clique(&graph, cfg.max_clique_nodes);
     if clique.vertices.len() < 3 {
-        return Err(CatmapError::Degenerate(format!(
-            "the largest consistent set of {} correspondences has {} members, registration needs 3",
-            correspondences.len(),
-            clique.vertices.len()
-        )));
+        return Err(CatmapError::too_few(
+            format!(
+                "mutually consistent correspondences (the largest set of {})",
+                correspondences.len()
+            ),
+            3,
+            clique.vertices.len(),
+        ));
     }
     let a: Vec<Vector3<f64>> = clique
         .vertices

@@ -94,12 +94,11 @@ pub fn place_furniture<R: Rng + ?Sized>(furnishing: &Furnishing, room: &Room, rn
             return Ok(placements);
         }
     }
-    Err(CatmapError::Degenerate(format!(
-        "could not place {} objects in a {:.1} × {:.1} m room",
-        furnishing.designs.len(),
-        2.0 * room.half_x_m,
-        2.0 * room.half_y_m
-    )))
+    Err(CatmapError::NoRoom {
+        objects: furnishing.designs.len(),
+        width_m: 2.0 * room.half_x_m,
+        depth_m: 2.0 * room.half_y_m,
+    })
 }
 
 /// The layout being built: placed poses by position in the furnishing, and their footprints.

@@ -126,10 +126,10 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
     let background_entity = world
         .query_filtered::<Entity, With<Background>>()
         .single(world)
-        .map_err(|e| CatmapError::Degenerate(format!("no single background entity: {e}")))?;
+        .map_err(|e| CatmapError::Invariant(format!("no single background entity: {e}")))?;
     let background = {
         let e = world.entity(background_entity);
-        let need = || CatmapError::Degenerate("the background lacks a component".to_owned());
+        let need = || CatmapError::Invariant("the background lacks a component".to_owned());
         BackgroundState {
             keyframes: e.get::<Keyframes>().ok_or_else(need)?.clone(),
             visible: *e.get::<VisibleFrames>().ok_or_else(need)?,
@@ -152,7 +152,7 @@ pub(crate) fn capture(world: &mut World, extra: String) -> Result<(MapperState, 
     let fields = world.resource::<Fields>();
     let mut object_fields = Vec::new();
     for (index, (field, owner)) in fields.objects.fields().iter().zip(&fields.object_owners).enumerate() {
-        let no_owner = || CatmapError::Degenerate(format!("object field {index} has no owner"));
+        let no_owner = || CatmapError::Invariant(format!("object field {index} has no owner"));
         let id = owner
             .as_ref()
             .map(|owner| id_of(owner).ok_or_else(no_owner))
@@ -216,7 +216,7 @@ fn field_state(e: EntityRef) -> Option<FieldState> {
 
 fn object_state(world: &World, entity: Entity) -> Result<ObjectState, CatmapError> {
     let e = world.entity(entity);
-    let need = |what: &str| CatmapError::Degenerate(format!("an object lacks its {what}"));
+    let need = |what: &str| CatmapError::Invariant(format!("an object lacks its {what}"));
     Ok(ObjectState {
         object: *e.get::<Object>().ok_or_else(|| need("id"))?,
         class: *e.get::<ObjectClass>().ok_or_else(|| need("class"))?,

@@ -6,6 +6,7 @@
 
 // The ECS data, the stages, and the one schedule that orders them.
 pub mod components;
+pub mod failed_step;
 pub mod resources;
 pub mod run_state;
 pub mod schedule;

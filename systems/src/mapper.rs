@@ -16,6 +16,7 @@ use crate::checkpoint::SavedMapper;
 use crate::components::{
     Background, Category, FieldLoss, FieldSlot, Keyframes, Object, ObjectCloud, ObjectRng, VisibleFrames,
 };
+use crate::failed_step::{FailedStep, StepFailure};
 use crate::recording::Rerun;
 use crate::resources::CategoryFields;
 use crate::resources::{
@@ -49,6 +50,13 @@ pub enum MapperError {
     /// `push` was called on a mapper fed by a reader thread, or after the end of the stream.
     #[error("this mapper does not accept pushed frames: {0}")]
     NotAccepting(&'static str),
+    /// A training step failed on a broken invariant: the run stops at the tick it failed in (a
+    /// checkpoint written before it is left to resume from).
+    #[error("{0}")]
+    StepFailed(Box<StepFailure>),
+    /// The mapper was stepped, or asked for a checkpoint, after a step failed.
+    #[error("the run stopped at a failed training step")]
+    Stopped,
 }
 
 /// A streaming mapper: push frames (or attach a reader thread), step, and read the map.
@@ -57,6 +65,8 @@ pub struct Mapper {
     schedule: Schedule,
     /// Sending end for `push`; `None` when a reader thread feeds the inbox, or after `end_stream`.
     pusher: Option<Sender<StreamMessage>>,
+    /// Whether a step failed ([`MapperError::StepFailed`]): the mapper runs no more ticks.
+    failed: bool,
 }
 
 impl Mapper {
@@ -106,10 +116,12 @@ impl Mapper {
         if world.resource::<Settings>().0.stream.live.enabled {
             world.insert_resource(LiveTicks::new(std::sync::Arc::default()));
         }
+        world.init_resource::<FailedStep>();
         Ok(Self {
             world,
             schedule: build_schedule(),
             pusher: None,
+            failed: false,
         })
     }
 
@@ -152,7 +164,7 @@ impl Mapper {
                 Ok(()) => return Ok(()),
                 Err(TrySendError::Full(returned)) => {
                     message = returned;
-                    self.step();
+                    self.step()?;
                 }
                 Err(TrySendError::Disconnected(_)) => return Err(MapperError::NotAccepting("inbox closed")),
             }
@@ -160,7 +172,7 @@ impl Mapper {
     }
 
     /// Tells a push-fed mapper that no more frames will come.
-    pub fn end_stream(&mut self) {
+    pub fn end_stream(&mut self) -> Result<(), MapperError> {
         if let Some(sender) = self.pusher.take() {
             // The receiver lives in the world, so the channel is open; a full one is drained first.
             let mut message = StreamMessage::End(StreamStats::default());
@@ -169,16 +181,28 @@ impl Mapper {
                     Ok(()) | Err(TrySendError::Disconnected(_)) => break,
                     Err(TrySendError::Full(returned)) => {
                         message = returned;
-                        self.step();
+                        self.step()?;
                     }
                 }
             }
         }
+        Ok(())
     }
 
-    /// Runs every stage once.
-    pub fn step(&mut self) {
+    /// Runs every stage once. Errors when a training step failed in this tick (once; later
+    /// calls return [`MapperError::Stopped`]).
+    pub fn step(&mut self) -> Result<(), MapperError> {
+        if self.failed {
+            return Err(MapperError::Stopped);
+        }
         self.schedule.run(&mut self.world);
+        match self.world.resource_mut::<FailedStep>().0.take() {
+            Some(failure) => {
+                self.failed = true;
+                Err(MapperError::StepFailed(Box::new(failure)))
+            }
+            None => Ok(()),
+        }
     }
 
     /// The reader's statistics, once the stream has ended.
@@ -199,8 +223,12 @@ impl Mapper {
     }
 
     /// Writes the mapper's whole state to the checkpoint folder `dir` (a new generation; see
-    /// `catmap::checkpoint`), with `extra` (the caller's own JSON) beside it.
+    /// `catmap::checkpoint`), with `extra` (the caller's own JSON) beside it. Refused after a
+    /// failed step, so that the checkpoint written before it is kept.
     pub fn save_checkpoint(&mut self, dir: &Path, label: &str, extra: String) -> Result<(), MapperError> {
+        if self.failed {
+            return Err(MapperError::Stopped);
+        }
         let (state, tensors) = crate::checkpoint::capture(&mut self.world, extra)?;
         catmap::checkpoint::write_checkpoint(dir, &state, &tensors, label)?;
         Ok(())
@@ -286,7 +314,7 @@ impl Mapper {
             self.world.insert_resource(CurrentPhase(RunPhase::Meshing));
         }
         if self.phase() == RunPhase::Meshing {
-            self.step();
+            self.step()?;
         }
         Ok(self.world.resource_mut::<FinalMeshes>().take_map().unwrap_or_default())
     }

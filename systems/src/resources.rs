@@ -218,19 +218,9 @@ pub struct TrainingSchedule {
 }
 
 impl TrainingSchedule {
-    /// Records a batched step's per-field losses (in `keys` order) with the scheduler, or warns
-    /// that the step of `batch` was skipped.
-    pub fn record_step(
-        &mut self,
-        keys: &[FieldKey],
-        step: catmap::Result<Vec<f32>>,
-        plateau: &PlateauConfig,
-        batch: &str,
-    ) {
-        match step {
-            Ok(losses) => self.scheduler.record_step(keys, &losses, plateau),
-            Err(e) => tracing::warn!(error = %e, "{batch} training step skipped"),
-        }
+    /// Records a batched step's per-field losses (in `keys` order) with the scheduler.
+    pub fn record_step(&mut self, keys: &[FieldKey], losses: &[f32], plateau: &PlateauConfig) {
+        self.scheduler.record_step(keys, losses, plateau);
     }
 }
 

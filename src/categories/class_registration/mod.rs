@@ -117,7 +117,7 @@ pub fn register_class_seeing(
     looked: LookedAt<'_>,
 ) -> Result<ClassRegistration> {
     if members.is_empty() {
-        return Err(CatmapError::Degenerate("a class without members".into()));
+        return Err(CatmapError::too_few("members of a class", 1, 0));
     }
     let clouds: BTreeMap<ObjectId, Vec<Point3<f32>>> = members
         .iter()

@@ -98,7 +98,7 @@ impl<'a> ClassClouds<'a> {
         self.clouds
             .get(&id)
             .map(Vec::as_slice)
-            .ok_or_else(|| CatmapError::Degenerate(format!("no cloud for object {id}")))
+            .ok_or_else(|| CatmapError::missing(format!("the cloud of object {id}")))
     }
 
     /// Every pair answered, for the next registration of the class.

@@ -5,8 +5,8 @@ use candle_core::{D, DType, Device, Tensor, Var};
 
 use super::super::adamw::AdamWConfig;
 use super::super::layout::{ParamLayout, TensorSpec};
-use super::super::reference::{ce, flat_grads, linear, vars};
-use crate::error::Result;
+use super::super::reference::{flat_grads, linear, vars};
+use crate::error::{CatmapError, Result};
 
 /// A plain ReLU MLP (`dims`), L1 loss mean over `[N × dL]`: returns the loss and the gradient.
 pub fn mlp_reference(
@@ -19,24 +19,17 @@ pub fn mlp_reference(
     let layout = ParamLayout::mlp(dims);
     let vars = vars(&layout, params, dtype)?;
     let n = inputs.len() / dims[0];
-    let mut h = Tensor::from_slice(inputs, (n, dims[0]), &Device::Cpu)
-        .and_then(|x| x.to_dtype(dtype))
-        .map_err(ce)?;
+    let mut h = Tensor::from_slice(inputs, (n, dims[0]), &Device::Cpu).and_then(|x| x.to_dtype(dtype))?;
     let layers = dims.len() - 1;
     for l in 0..layers {
-        h = linear(&h, &vars[2 * l], &vars[2 * l + 1]).map_err(ce)?;
+        h = linear(&h, &vars[2 * l], &vars[2 * l + 1])?;
         if l + 1 < layers {
-            h = h.relu().map_err(ce)?;
+            h = h.relu()?;
         }
     }
-    let t = Tensor::from_slice(targets, h.dims(), &Device::Cpu)
-        .and_then(|x| x.to_dtype(dtype))
-        .map_err(ce)?;
-    let loss = h.sub(&t).and_then(|x| x.abs()).and_then(|x| x.mean_all()).map_err(ce)?;
-    let value = loss
-        .to_dtype(DType::F64)
-        .and_then(|x| x.to_scalar::<f64>())
-        .map_err(ce)?;
+    let t = Tensor::from_slice(targets, h.dims(), &Device::Cpu).and_then(|x| x.to_dtype(dtype))?;
+    let loss = h.sub(&t).and_then(|x| x.abs()).and_then(|x| x.mean_all())?;
+    let value = loss.to_dtype(DType::F64).and_then(|x| x.to_scalar::<f64>())?;
     Ok((value, flat_grads(&layout, &vars, &loss)?))
 }
 
@@ -69,14 +62,13 @@ impl CandleMlpBatch {
             // W stored as (B, in, out) so that h = x · W.
             let wt = stack(w, &[bsz, dims[l + 1], dims[l]])
                 .and_then(|t| t.transpose(1, 2))
-                .and_then(|t| t.contiguous())
-                .map_err(ce)?;
-            let bt = stack(b, &[bsz, 1, dims[l + 1]]).map_err(ce)?;
+                .and_then(|t| t.contiguous())?;
+            let bt = stack(b, &[bsz, 1, dims[l + 1]])?;
             for t in [&wt, &bt] {
-                moments.push((t.zeros_like().map_err(ce)?, t.zeros_like().map_err(ce)?));
+                moments.push((t.zeros_like()?, t.zeros_like()?));
             }
-            weights.push(Var::from_tensor(&wt).map_err(ce)?);
-            biases.push(Var::from_tensor(&bt).map_err(ce)?);
+            weights.push(Var::from_tensor(&wt)?);
+            biases.push(Var::from_tensor(&bt)?);
         }
         Ok(Self {
             weights,
@@ -122,6 +114,6 @@ impl CandleMlpBatch {
             }
             loss.to_scalar::<f32>()
         };
-        run().map_err(ce)
+        run().map_err(CatmapError::from)
     }
 }

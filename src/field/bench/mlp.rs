@@ -140,9 +140,11 @@ impl MlpBatch {
                 .zip(targets)
                 .any(|(x, t)| !x.len().is_multiple_of(d0) || t.len() != x.len() / d0 * dl);
         if bad {
-            return Err(CatmapError::Degenerate(format!(
-                "MLP batch of {count}: inputs/targets do not match widths {d0}/{dl}"
-            )));
+            return Err(CatmapError::mismatch(
+                format!("inputs / targets of an MLP batch of {count}"),
+                format!("multiples of widths {d0} / {dl}"),
+                "other lengths",
+            ));
         }
         self.packed.resize_with(count, Vec::new);
         let (layers, packed_len) = (&self.layers, self.packed_len);

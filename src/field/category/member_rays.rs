@@ -21,10 +21,11 @@ impl CategorySamples {
     ) -> Result<()> {
         rays.validate()?;
         if self.rays.num_rays() > 0 && rays.samples_per_ray != self.rays.samples_per_ray {
-            return Err(CatmapError::Degenerate(format!(
-                "member rays have {} samples per ray, the category's {}",
-                rays.samples_per_ray, self.rays.samples_per_ray
-            )));
+            return Err(CatmapError::mismatch(
+                "a member's samples per ray",
+                self.rays.samples_per_ray,
+                rays.samples_per_ray,
+            ));
         }
         for p in &mut rays.points {
             let q = nocs_from_world * (Point3::from(*p) + field_origin.coords);

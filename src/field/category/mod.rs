@@ -82,16 +82,18 @@ impl CategorySamples {
     pub fn validate(&self, members: usize) -> Result<()> {
         self.rays.validate()?;
         if self.members.len() != self.rays.num_rays() {
-            return Err(CatmapError::Degenerate(format!(
-                "category samples: {} rays but {} member indices",
+            return Err(CatmapError::mismatch(
+                "category samples' member indices",
                 self.rays.num_rays(),
-                self.members.len()
-            )));
+                self.members.len(),
+            ));
         }
         match self.members.iter().find(|&&m| m >= members) {
-            Some(m) => Err(CatmapError::Degenerate(format!(
-                "category samples: member {m} of a category with {members} members"
-            ))),
+            Some(&m) => Err(CatmapError::NoSuchIndex {
+                what: "category samples' member",
+                index: m,
+                len: members,
+            }),
             None => Ok(()),
         }
     }

@@ -67,16 +67,14 @@ impl CategoryField {
     ) -> Result<Self> {
         let want = ParamLayout::category(hidden, code_dim).len();
         if params.len() != want {
-            return Err(CatmapError::Degenerate(format!(
-                "category field with W = {hidden}, D = {code_dim} needs {want} parameters, got {}",
-                params.len()
-            )));
+            return Err(CatmapError::mismatch(
+                format!("parameters of a category field with W = {hidden}, D = {code_dim}"),
+                want,
+                params.len(),
+            ));
         }
         if let Some(bad) = codes.iter().find(|c| c.len() != 2 * code_dim) {
-            return Err(CatmapError::Degenerate(format!(
-                "a member's codes have {} values, expected 2·{code_dim}",
-                bad.len()
-            )));
+            return Err(CatmapError::mismatch("a member's code values", 2 * code_dim, bad.len()));
         }
         Ok(Self {
             hidden,
@@ -130,10 +128,11 @@ impl CategoryField {
     /// `rng` when `None`. The network and its optimiser state are untouched.
     pub fn remap_members(&mut self, sources: &[Option<usize>], rng: &mut impl Rng) -> Result<()> {
         if let Some(bad) = sources.iter().flatten().find(|&&j| j >= self.members.len()) {
-            return Err(CatmapError::Degenerate(format!(
-                "member {bad} of {} does not exist",
-                self.members.len()
-            )));
+            return Err(CatmapError::NoSuchIndex {
+                what: "category member",
+                index: *bad,
+                len: self.members.len(),
+            });
         }
         let mut old: Vec<Option<MemberCode>> = std::mem::take(&mut self.members).into_iter().map(Some).collect();
         for source in sources {
@@ -240,8 +239,10 @@ impl CategoryField {
             || codes.len() != self.members.len()
             || self.members.iter().zip(&codes).any(|(m, s)| !fits(s, m.code.len()))
         {
-            return Err(CatmapError::Degenerate(
-                "category optimiser states do not match the field's parameters and codes".to_owned(),
+            return Err(CatmapError::mismatch(
+                "category optimiser states (network values; members)",
+                format!("{}; {}", self.params.len(), self.members.len()),
+                format!("{}; {}", adam.m.len(), codes.len()),
             ));
         }
         self.adam = adam;
@@ -320,8 +321,10 @@ impl CategoryField {
         heads: Heads,
         take: impl Fn(&CategoryNet, &CategoryScratch, usize) -> T + Sync,
     ) -> Result<Vec<T>> {
-        let code = self.code(member).ok_or_else(|| {
-            CatmapError::Degenerate(format!("member {member} of a category with {}", self.num_members()))
+        let code = self.code(member).ok_or(CatmapError::NoSuchIndex {
+            what: "category member",
+            index: member,
+            len: self.num_members(),
         })?;
         let net = CategoryNet::new(self.hidden, self.code_dim);
         let mut packed = vec![0.0; net.packed_len];

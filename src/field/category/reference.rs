@@ -13,7 +13,7 @@ use super::super::directions::NUM_DIRECTIONS;
 use super::super::encoding::{GEO_DIMS, NUM_BANDS};
 use super::super::heads::ALPHA_SCALE;
 use super::super::loss::{COLOUR_WEIGHT, DEPTH_STD_EPS, OPACITY_WEIGHT};
-use super::super::reference::{ce, column, linear, sigmoid, vars};
+use super::super::reference::{column, linear, sigmoid, vars};
 use super::super::render::FREE_EPS;
 use super::super::samples::RaySamples;
 use super::{CODE_REG_WEIGHT, CategoryField, CategorySamples};
@@ -56,54 +56,46 @@ pub fn category_reference(
             .iter()
             .position(|t| t.name == name)
             .map(|i| &vars[i])
-            .ok_or_else(|| CatmapError::Degenerate(format!("no tensor {name}")))
+            .ok_or_else(|| CatmapError::missing(format!("tensor {name}")))
     };
     let (m, d) = (field.num_members(), field.code_dim());
     let codes: Vec<f32> = (0..m)
         .flat_map(|i| field.code(i).unwrap_or_default().to_vec())
         .collect();
-    let all = Tensor::from_slice(&codes, (m, 2 * d), &Device::Cpu)
-        .and_then(|t| t.to_dtype(dtype))
-        .map_err(ce)?;
-    let z_shape = Var::from_tensor(&all.narrow(1, 0, d).and_then(|t| t.contiguous()).map_err(ce)?).map_err(ce)?;
-    let z_texture = Var::from_tensor(&all.narrow(1, d, d).and_then(|t| t.contiguous()).map_err(ce)?).map_err(ce)?;
+    let all = Tensor::from_slice(&codes, (m, 2 * d), &Device::Cpu).and_then(|t| t.to_dtype(dtype))?;
+    let z_shape = Var::from_tensor(&all.narrow(1, 0, d).and_then(|t| t.contiguous())?)?;
+    let z_texture = Var::from_tensor(&all.narrow(1, d, d).and_then(|t| t.contiguous())?)?;
 
     let rays = &samples.rays;
     let (r, s) = (rays.num_rays(), rays.samples_per_ray);
     let n = r * s;
     let index: Vec<u32> = (0..n).map(|k| samples.members[k / s] as u32).collect();
-    let index = Tensor::from_slice(&index, n, &Device::Cpu).map_err(ce)?;
+    let index = Tensor::from_slice(&index, n, &Device::Cpu)?;
     let fc = |x: &Tensor, name: &str| -> Result<Tensor> {
-        linear(x, var(&format!("{name}.weight"))?, var(&format!("{name}.bias"))?).map_err(ce)
+        linear(x, var(&format!("{name}.weight"))?, var(&format!("{name}.bias"))?).map_err(CatmapError::from)
     };
-    let relu_fc = |x: &Tensor, name: &str| fc(x, name)?.relu().map_err(ce);
-    let cat = |a: &Tensor, b: &Tensor| Tensor::cat(&[a, b], 1).map_err(ce);
-    let zs = z_shape.as_tensor().index_select(&index, 0).map_err(ce)?;
-    let zt = z_texture.as_tensor().index_select(&index, 0).map_err(ce)?;
+    let relu_fc = |x: &Tensor, name: &str| fc(x, name)?.relu().map_err(CatmapError::from);
+    let cat = |a: &Tensor, b: &Tensor| Tensor::cat(&[a, b], 1).map_err(CatmapError::from);
+    let zs = z_shape.as_tensor().index_select(&index, 0)?;
+    let zt = z_texture.as_tensor().index_select(&index, 0)?;
 
     // Encoding.
     let flat: Vec<f32> = rays.points.iter().flatten().copied().collect();
-    let pts = Tensor::from_slice(&flat, (n, 3), &Device::Cpu)
-        .and_then(|p| p.to_dtype(dtype))
-        .map_err(ce)?;
-    let xs = (pts / f64::from(field.scale())).map_err(ce)?;
-    let proj = xs
-        .matmul(&var("encoding.B")?.as_tensor().t().map_err(ce)?)
-        .map_err(ce)?;
+    let pts = Tensor::from_slice(&flat, (n, 3), &Device::Cpu).and_then(|p| p.to_dtype(dtype))?;
+    let xs = (pts / f64::from(field.scale()))?;
+    let proj = xs.matmul(&var("encoding.B")?.as_tensor().t()?)?;
     let mut parts = vec![xs.clone()];
     for k in 0..NUM_BANDS {
         let f = std::f64::consts::PI * f64::from(1u32 << k);
-        parts.push((&proj * f).and_then(|x| x.sin()).map_err(ce)?);
+        parts.push((&proj * f).and_then(|x| x.sin())?);
     }
-    let emb = Tensor::cat(&parts, 1).map_err(ce)?;
+    let emb = Tensor::cat(&parts, 1)?;
     debug_assert_eq!(emb.dims(), [n, 3 + NUM_BANDS * NUM_DIRECTIONS]);
-    let geo = emb.narrow(1, 0, GEO_DIMS).map_err(ce)?;
-    let col = emb
-        .narrow(1, GEO_DIMS, emb.dim(1).map_err(ce)? - GEO_DIMS)
-        .map_err(ce)?;
+    let geo = emb.narrow(1, 0, GEO_DIMS)?;
+    let col = emb.narrow(1, GEO_DIMS, emb.dim(1)? - GEO_DIMS)?;
 
     // The network (module doc of `category`).
-    let add = |y: Tensor, z: &Tensor, name: &str| (y + relu_fc(z, name)?).map_err(ce);
+    let add = |y: Tensor, z: &Tensor, name: &str| (y + relu_fc(z, name)?).map_err(CatmapError::from);
     let y = relu_fc(&geo, "encoding_xyz")?;
     let y = add(y, &zs, "shape_latent_layer_1")?;
     let y = relu_fc(&y, "shape_layer_1")?;
@@ -112,27 +104,23 @@ pub fn category_reference(
     let y = add(y, &zs, "shape_latent_layer_2")?;
     let y = relu_fc(&y, "shape_layer_2")?;
     let y = fc(&y, "encoding_shape")?;
-    let alpha = (fc(&y, "sigma")? * f64::from(ALPHA_SCALE)).map_err(ce)?;
+    let alpha = (fc(&y, "sigma")? * f64::from(ALPHA_SCALE))?;
     let y = relu_fc(&cat(&y, &col)?, "encoding_viewdir")?;
     let y = add(y, &zt, "texture_latent_layer_1")?;
     let y = relu_fc(&y, "texture_layer_1")?;
     let y = relu_fc(&y, "rgb.0")?;
-    let colour = sigmoid(&fc(&y, "rgb.2")?)
-        .and_then(|c| c.reshape((r, s, 3)))
-        .map_err(ce)?;
-    let occ = sigmoid(&alpha).and_then(|o| o.reshape((r, s))).map_err(ce)?;
+    let colour = sigmoid(&fc(&y, "rgb.2")?).and_then(|c| c.reshape((r, s, 3)))?;
+    let occ = sigmoid(&alpha).and_then(|o| o.reshape((r, s)))?;
 
-    let (l_depth, l_colour, l_opacity) = render_losses(&occ, &colour, rays, dtype).map_err(ce)?;
+    let (l_depth, l_colour, l_opacity) = render_losses(&occ, &colour, rays, dtype)?;
     let norm = |z: &Var| z.as_tensor().sqr()?.sum(1)?.sqrt()?.sum_all();
-    let reg = ((norm(&z_shape).map_err(ce)? + norm(&z_texture).map_err(ce)?).map_err(ce)? * f64::from(CODE_REG_WEIGHT))
-        .map_err(ce)?;
+    let reg = ((norm(&z_shape)? + norm(&z_texture)?)? * f64::from(CODE_REG_WEIGHT))?;
     let total = (|| -> CResult<Tensor> {
         let rendered =
             ((&l_depth + (&l_colour * f64::from(COLOUR_WEIGHT))?)? + (&l_opacity * f64::from(OPACITY_WEIGHT))?)?;
         rendered + &reg
-    })()
-    .map_err(ce)?;
-    let grads = total.backward().map_err(ce)?;
+    })()?;
+    let grads = total.backward()?;
     let mut grad = vec![0.0; layout.len()];
     for (t, v) in layout.tensors().iter().zip(&vars) {
         if let Some(g) = flat_grad(&grads, v)? {
@@ -144,7 +132,11 @@ pub fn category_reference(
     let code_grads = (0..m)
         .map(|i| [&gs[i * d..(i + 1) * d], &gt[i * d..(i + 1) * d]].concat())
         .collect();
-    let scalar = |t: &Tensor| t.to_dtype(DType::F64).and_then(|t| t.to_scalar::<f64>()).map_err(ce);
+    let scalar = |t: &Tensor| {
+        t.to_dtype(DType::F64)
+            .and_then(|t| t.to_scalar::<f64>())
+            .map_err(CatmapError::from)
+    };
     Ok(CategoryReferenceOutput {
         total: scalar(&total)?,
         depth: scalar(&l_depth)?,
@@ -163,7 +155,7 @@ fn flat_grad(grads: &GradStore, v: &Var) -> Result<Option<Vec<f64>>> {
             g.flatten_all()
                 .and_then(|g| g.to_dtype(DType::F64))
                 .and_then(|g| g.to_vec1::<f64>())
-                .map_err(ce)
+                .map_err(CatmapError::from)
         })
         .transpose()
 }

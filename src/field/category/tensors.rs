@@ -13,7 +13,7 @@ const SHAPE_CODES: &str = "shape_codes.weight";
 const TEXTURE_CODES: &str = "texture_codes.weight";
 
 fn tensor(values: &[f32], shape: (usize, usize), name: &str) -> Result<Tensor> {
-    Tensor::from_slice(values, shape, &Device::Cpu).map_err(|e| CatmapError::Degenerate(format!("tensor {name}: {e}")))
+    Tensor::from_slice(values, shape, &Device::Cpu).map_err(CatmapError::tensor(name))
 }
 
 fn find<'a>(tensors: &'a [(String, Tensor)], name: &str) -> Result<&'a Tensor> {
@@ -21,19 +21,20 @@ fn find<'a>(tensors: &'a [(String, Tensor)], name: &str) -> Result<&'a Tensor> {
         .iter()
         .find(|(n, _)| n == name)
         .map(|(_, t)| t)
-        .ok_or_else(|| CatmapError::Degenerate(format!("tensor {name} is missing")))
+        .ok_or_else(|| CatmapError::missing(format!("tensor {name}")))
 }
 
 fn values(t: &Tensor, name: &str, dims: &[usize]) -> Result<Vec<f32>> {
     if t.dims() != dims {
-        return Err(CatmapError::Degenerate(format!(
-            "tensor {name} has shape {:?}, expected {dims:?}",
-            t.dims()
-        )));
+        return Err(CatmapError::mismatch(
+            format!("shape of tensor {name}"),
+            format!("{dims:?}"),
+            format!("{:?}", t.dims()),
+        ));
     }
     t.flatten_all()
         .and_then(|t| t.to_vec1::<f32>())
-        .map_err(|e| CatmapError::Degenerate(format!("tensor {name}: {e}")))
+        .map_err(CatmapError::tensor(name))
 }
 
 impl CategoryField {

@@ -187,10 +187,11 @@ impl TriangleMesh {
             .collect();
         let total = cumulative.last().copied().unwrap_or(0.0);
         if count > 0 && !(total > 0.0 && total.is_finite()) {
-            return Err(CatmapError::Degenerate(format!(
-                "cannot sample a mesh of area {total} ({} triangles)",
-                self.triangles.len()
-            )));
+            return Err(CatmapError::bad_value(
+                "the area of a mesh to sample",
+                total,
+                "be positive and finite",
+            ));
         }
         let last = self.triangles.len().saturating_sub(1);
         let points = (0..count)

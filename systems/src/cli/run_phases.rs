@@ -95,13 +95,16 @@ pub fn drive(start: Start, plan: RunPlan, source: Arc<dyn FrameSource>, started:
     }
     let mut bars = PhaseBars::new(&config, positions.len() as u64, dropped);
     let mut last_stream_tick = Instant::now();
-    while let RunOutcome::Paused(at) = mapper.run(|progress| {
-        if progress.phase == RunPhase::Stream {
-            last_stream_tick = Instant::now();
-        }
-        bars.show(progress);
-        checkpoints.break_if(progress)
-    }) {
+    while let RunOutcome::Paused(at) = mapper
+        .run(|progress| {
+            if progress.phase == RunPhase::Stream {
+                last_stream_tick = Instant::now();
+            }
+            bars.show(progress);
+            checkpoints.break_if(progress)
+        })
+        .with_context(|| checkpoints.after_failure())?
+    {
         let label = match at.phase {
             RunPhase::Stream => format!("frame {} of {}", mapper.positions_consumed(), positions.len()),
             RunPhase::AfterStream => format!("{}, {} steps", bars.after_stream, mapper.training_steps()),
@@ -346,6 +349,20 @@ impl Checkpoints {
             std::process::exit(INTERRUPTED_EXIT);
         }
         Ok(())
+    }
+
+    /// What a run that stopped at a failed step leaves: the checkpoint written before it, or none.
+    fn after_failure(&self) -> String {
+        let dir = self.plan.checkpoint_dir();
+        if dir.exists() {
+            format!(
+                "the run stopped; its last checkpoint, {}, is kept (catmap run --resume {})",
+                dir.display(),
+                self.plan.out.display()
+            )
+        } else {
+            "the run stopped before its first checkpoint".to_owned()
+        }
     }
 
     /// Deletes the checkpoint once the run has completed, unless `checkpoint.keep`.

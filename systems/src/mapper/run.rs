@@ -37,21 +37,25 @@ impl Mapper {
     /// Runs the remaining phases — the stream until its end, the training after it, the
     /// category phase, the final meshing — calling `on_progress` after every tick but the
     /// meshing's; pauses when it breaks. A paused (or restored) mapper continues where it was.
-    pub fn run(&mut self, mut on_progress: impl FnMut(RunProgress) -> ControlFlow<()>) -> RunOutcome {
+    /// Errors when a training step fails ([`super::MapperError::StepFailed`]).
+    pub fn run(
+        &mut self,
+        mut on_progress: impl FnMut(RunProgress) -> ControlFlow<()>,
+    ) -> Result<RunOutcome, super::MapperError> {
         loop {
             let phase = self.phase();
             if phase == RunPhase::Done {
-                return RunOutcome::Complete;
+                return Ok(RunOutcome::Complete);
             }
             if phase == RunPhase::Stream && !self.frame_or_tick_due() {
                 continue;
             }
-            self.step();
+            self.step()?;
             if let Some(progress) = self.progress_of(phase)
                 && on_progress(progress).is_break()
                 && self.phase() != RunPhase::Done
             {
-                return RunOutcome::Paused(progress);
+                return Ok(RunOutcome::Paused(progress));
             }
         }
     }

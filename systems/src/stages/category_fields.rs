@@ -18,6 +18,7 @@ use rayon::prelude::*;
 use crate::components::{
     CameraFrame, CategorySlot, FieldRng, FieldSlot, Keyframes, LatestBox, Object, ObjectBounds, Subcategories,
 };
+use crate::failed_step::{FailedStep, StepError, TrainingStep};
 use crate::resources::{CategoryFields, Settings, StageTimes, StreamProgress, TrainingSchedule};
 
 /// Keeps one category field per multi-member subcategory whenever a registration changed
@@ -80,12 +81,13 @@ pub fn train_category_fields(
     progress: Res<StreamProgress>,
     mut members: Members,
     objects: Query<(), (With<Object>, With<FieldSlot>)>,
+    mut failed: ResMut<FailedStep>,
     mut times: ResMut<StageTimes>,
 ) {
     let (config, schedule) = (&settings.0, &mut *schedule);
     schedule.planned_categories = 0;
     let pending = std::mem::take(&mut fields.pending);
-    if pending == 0 || fields.members.is_empty() {
+    if pending == 0 || fields.members.is_empty() || failed.is_set() {
         return;
     }
     let _timer = times.start("category_train");
@@ -116,8 +118,16 @@ pub fn train_category_fields(
         }
         let hidden = (&mut fields.member_hidden, prior);
         let sampled = sample_members(&mut members, &plan.indices, (&rays, meshing), hidden);
-        let step = fields.train_step(&plan, sampled);
-        schedule.record_step(&plan.keys, step, &config.schedule.plateau, "category");
+        match fields.train_step(&plan, sampled) {
+            Ok(losses) => schedule.record_step(&plan.keys, &losses, &config.schedule.plateau),
+            Err(error) => {
+                let error = StepError {
+                    fields: plan.keys.clone(),
+                    error,
+                };
+                return failed.record(TrainingStep::CategoryFields, fields.steps_done, error);
+            }
+        }
         fields.steps_done += 1;
     }
 }

@@ -14,7 +14,7 @@ use catmap::FrameIndex;
 use catmap::meshing::ObjectMeshConfig;
 use catmap::objects::hidden_space::HiddenSpaceCache;
 use catmap::training::{
-    BatchPlan, ClassShare, ClassSizes, FieldFacts, MeshSource, StreamPhase, class_sizes, object_field_facts,
+    BatchPlan, ClassShare, ClassSizes, FieldFacts, FieldKey, MeshSource, StreamPhase, class_sizes, object_field_facts,
     takes_shape_priors,
 };
 
@@ -22,6 +22,7 @@ use crate::components::{
     Background, CameraFrame, Category, CategorySlot, FieldLoss, FieldRng, FieldSlot, Keyframes, LatestBox, Object,
     ObjectBounds,
 };
+use crate::failed_step::{FailedStep, StepError, TrainingStep};
 use crate::resources::{Fields, Settings, StageTimes, StreamProgress, TrainingQueue, TrainingSchedule};
 
 /// Gives every object that has a box (and the background, once it has keyframes) its field,
@@ -106,9 +107,10 @@ pub fn train_fields(
     frames: Query<&CameraFrame>,
     categories: Query<&Category>,
     mut owners: FieldOwners,
+    mut failed: ResMut<FailedStep>,
     mut times: ResMut<StageTimes>,
 ) {
-    if queue.pending == 0 {
+    if queue.pending == 0 || failed.is_set() {
         return;
     }
     let _timer = times.start("train");
@@ -131,13 +133,16 @@ pub fn train_fields(
                 (&object_rays, &class_sizes),
                 &config.meshes.object,
             );
-            schedule.record_step(&plan.keys, step, &config.schedule.plateau, "object");
+            match step {
+                Ok(losses) => schedule.record_step(&plan.keys, &losses, &config.schedule.plateau),
+                Err(e) => return failed.record(TrainingStep::ObjectFields, queue.steps_done, e),
+            }
         }
         if cfg.background_due(queue.steps_done) && !fields.background.is_empty() {
             let (plan, batch) = (BatchPlan::background(), (&mut fields.background, &mut Vec::new()));
             let (rays, meshing) = ((&cfg.background_rays, &ClassSizes::default()), &config.meshes.object);
             if let Err(e) = train_one(&mut owners, FieldOwner::Background, &plan, batch, rays, meshing) {
-                tracing::warn!(error = %e, "background training step skipped");
+                return failed.record(TrainingStep::Background, queue.steps_done, e);
             }
         }
         queue.steps_done += 1;
@@ -170,7 +175,8 @@ fn object_facts(
 /// carving counts; returns their total losses, in index order. `hidden` keeps, per batch index,
 /// the cells of each object's box no view saw into (the solid prior's; empty for the background);
 /// `class_sizes` are the objects of each object's class (an object alone in its class takes the
-/// priors of objects without a twin).
+/// priors of objects without a twin). Errors name every planned field, or the objects whose
+/// slots lie outside the batch.
 fn train_one(
     owners: &mut FieldOwners,
     owner: FieldOwner,
@@ -178,9 +184,14 @@ fn train_one(
     (batch, hidden): (&mut catmap::field::FieldBatch, &mut Vec<HiddenSpaceCache>),
     (rays, class_sizes): (&RaySamplerConfig, &ClassSizes),
     meshing: &ObjectMeshConfig,
-) -> catmap::Result<Vec<f32>> {
+) -> Result<Vec<f32>, StepError> {
     let indices = &plan.indices[..];
     let background = owner == FieldOwner::Background;
+    let outside: Vec<FieldKey> = owners
+        .iter()
+        .filter(|(is_background, .., slot, _, _)| *is_background == background && slot.index >= batch.len())
+        .map(|(_, object, ..)| object.map_or(FieldKey::Background, |o| FieldKey::Object(o.id)))
+        .collect();
     let mut work: Vec<_> = owners
         .iter_mut()
         .filter(|(is_background, .., slot, _, _)| {
@@ -201,10 +212,12 @@ fn train_one(
     work.sort_by_key(|(_, slot, ..)| slot.index);
     let owned: Vec<usize> = work.iter().map(|(_, slot, ..)| slot.index).collect();
     if owned != indices || indices.last().is_some_and(|&i| i >= batch.len()) {
-        return Err(catmap::CatmapError::Degenerate(format!(
+        let error = catmap::CatmapError::Invariant(format!(
             "{} fields but owners with slots {owned:?} for the planned {indices:?}",
             batch.len()
-        )));
+        ));
+        let fields = if outside.is_empty() { plan.keys.clone() } else { outside };
+        return Err(StepError { fields, error });
     }
     if !background && hidden.len() < batch.len() {
         hidden.resize_with(batch.len(), HiddenSpaceCache::default);
@@ -233,7 +246,12 @@ fn train_one(
             )
         })
         .collect();
-    let losses = batch.train_step_scaled(indices, &plan.learning_rate_scales, &fields)?;
+    let losses = batch
+        .train_step_scaled(indices, &plan.learning_rate_scales, &fields)
+        .map_err(|error| StepError {
+            fields: plan.keys.clone(),
+            error,
+        })?;
     for (((.., loss, _), latest), sampled) in work.iter_mut().zip(&losses).zip(&fields) {
         loss.latest = *latest;
         loss.steps += 1;

@@ -1,9 +1,11 @@
 //! `catmap run` killed with SIGKILL and continued with `catmap run --resume`:
-//! - at random moments and inside checkpoint writes (checkpoints every 2 frames and every 50
-//!   steps; at least two kills leave a write unfinished): after every kill the checkpoint on disk
-//!   is intact and no output file is half-written;
-//! - a default run killed a third of the way through, with checkpoints by the clock alone: the
-//!   kill finds a checkpoint to resume from.
+//! - at random checkpoint generations and inside checkpoint writes (checkpoints every 2 frames
+//!   and every 50 steps; at least two kills leave a write unfinished): after every kill the
+//!   checkpoint on disk is intact and no output file is half-written;
+//! - a default run with checkpoints by the clock alone, killed once its second one is written.
+//!
+//! Kills are timed by the generations the manifest names, never by another run's wall clock, so a
+//! loaded machine changes when they land, not whether the test holds.
 //!
 //! Either way the final meshes, categories.json and metrics.json equal those of a run that was
 //! never interrupted, byte for byte.
@@ -12,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use catmap::checkpoint::{MANIFEST, verify_checkpoint};
+use catmap::checkpoint::{MANIFEST, read_manifest, verify_checkpoint};
 use catmap::geometry::mesh::TriangleMesh;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -111,6 +113,11 @@ fn unfinished_write(checkpoint: &Path) -> bool {
     })
 }
 
+/// The generation of the checkpoint in `checkpoint` (0 when there is none yet).
+fn generation(checkpoint: &Path) -> u64 {
+    read_manifest(checkpoint).map_or(0, |m| m.generation)
+}
+
 /// Whether a checkpoint file is being written (a `.tmp` file exists in the folder).
 fn writing(checkpoint: &Path) -> bool {
     std::fs::read_dir(checkpoint).is_ok_and(|entries| {
@@ -167,18 +174,16 @@ fn synthesise(work: &Path) {
 }
 
 #[test]
-fn a_run_killed_at_random_moments_and_inside_checkpoint_writes_resumes_like_an_uninterrupted_one() {
+fn a_run_killed_at_random_generations_and_inside_checkpoint_writes_resumes_like_an_uninterrupted_one() {
     let work = tempfile::tempdir().expect("temp dir");
     let work = work.path();
     std::fs::write(work.join("config.toml"), CONFIG).expect("config written");
     synthesise(work);
 
     let reference = work.join("reference");
-    let started = Instant::now();
     let mut command = catmap();
     run_args(&mut command, work, &reference);
     assert!(command.status().expect("catmap runs").success(), "uninterrupted run");
-    let full = started.elapsed();
     assert!(
         !reference.join("checkpoint").exists(),
         "the checkpoint is removed after success"
@@ -195,14 +200,15 @@ fn a_run_killed_at_random_moments_and_inside_checkpoint_writes_resumes_like_an_u
         } else {
             run_args(&mut command, work, &killed);
         }
+        let checkpoint = killed.join("checkpoint");
+        let start = generation(&checkpoint);
         let mut child = command.spawn().expect("catmap starts");
         // Odd kills land as soon as a checkpoint file is being written (from the sixth on, every
-        // kill until two writes were torn); even ones at a random time, short enough (at most a
-        // fifth of the run each) that the run cannot finish before the eighth kill.
+        // kill until two writes were torn); even ones once the manifest names a generation one
+        // or two past the one the attempt started from (drawn from the seeded generator): the
+        // run has ~20 generations, so it cannot finish before the eighth kill.
         let at_write = kills % 2 == 1 || (kills >= 6 && torn_writes < 2);
-        let limit = Duration::from_secs_f64(rng.random_range(0.05..0.2) * full.as_secs_f64());
-        let checkpoint = killed.join("checkpoint");
-        let started = Instant::now();
+        let kill_at = start + rng.random_range(1..=2u64);
         let status = loop {
             if let Some(status) = child.try_wait().expect("waits") {
                 break Some(status);
@@ -211,9 +217,9 @@ fn a_run_killed_at_random_moments_and_inside_checkpoint_writes_resumes_like_an_u
             let wanted = kills < 8 || (torn_writes < 2 && kills < 24);
             let due = wanted
                 && if at_write {
-                    writing(&checkpoint) || started.elapsed() >= full
+                    writing(&checkpoint)
                 } else {
-                    started.elapsed() >= limit
+                    generation(&checkpoint) >= kill_at
                 };
             if due {
                 child.kill().expect("SIGKILL");
@@ -238,7 +244,7 @@ fn a_run_killed_at_random_moments_and_inside_checkpoint_writes_resumes_like_an_u
             }
         }
     }
-    println!("{kills} kills ({torn_writes} inside a checkpoint write), {resumes} resumes; full run {full:?}");
+    println!("{kills} kills ({torn_writes} inside a checkpoint write), {resumes} resumes");
     assert!(kills >= 8 && resumes >= 1, "the run was interrupted and resumed");
     assert!(
         torn_writes >= 2,
@@ -252,7 +258,7 @@ fn a_run_killed_at_random_moments_and_inside_checkpoint_writes_resumes_like_an_u
 }
 
 #[test]
-fn a_default_run_killed_a_third_of_the_way_resumes_from_its_clock_checkpoint_to_the_same_outputs() {
+fn a_default_run_killed_after_its_second_clock_checkpoint_resumes_to_the_same_outputs() {
     let work = tempfile::tempdir().expect("temp dir");
     let work = work.path();
     synthesise(work);
@@ -286,19 +292,24 @@ fn a_default_run_killed_a_third_of_the_way_resumes_from_its_clock_checkpoint_to_
         .arg(&killed)
         .spawn()
         .expect("catmap starts");
-    std::thread::sleep(full / 3);
-    assert!(
-        child.try_wait().expect("waits").is_none(),
-        "the run is still going a third of the way through"
-    );
+    // Killed as soon as the manifest names the second checkpoint: with one every eighth of the
+    // run, a quarter of the way through.
+    let checkpoint = killed.join("checkpoint");
+    while generation(&checkpoint) < 2 {
+        assert!(
+            child.try_wait().expect("waits").is_none(),
+            "the run wrote two checkpoints by the clock (every {every_seconds:.2} s) before it ended"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
     child.kill().expect("SIGKILL");
     child.wait().expect("reaped");
     assert_outputs_whole(&killed);
-    let checkpoint = killed.join("checkpoint");
     let manifest = verify_checkpoint(&checkpoint)
         .unwrap_or_else(|e| panic!("a checkpoint every {every_seconds:.2} s left one to resume from: {e}"));
+    assert!(manifest.generation >= 2, "killed after the second checkpoint");
     println!(
-        "full run {full:?}; killed at a third; resumed from checkpoint {} ({})",
+        "full run {full:?}; killed at checkpoint {} ({})",
         manifest.generation, manifest.label
     );
     let status = catmap()

@@ -15,10 +15,13 @@ pub fn map_scene(scene: &SyntheticScene, positions: impl IntoIterator<Item = usi
         mapper
             .push(scene.read_frame(position).expect("frame renders"))
             .expect("valid frame");
-        mapper.step();
+        mapper.step().expect("a tick");
     }
-    mapper.end_stream();
-    mapper.step();
-    assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
+    mapper.end_stream().expect("a tick");
+    mapper.step().expect("a tick");
+    assert_eq!(
+        mapper.run(|_| ControlFlow::Continue(())).expect("the run"),
+        RunOutcome::Complete
+    );
     mapper
 }

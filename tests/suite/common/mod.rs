@@ -40,3 +40,28 @@ pub fn assert_mentions(err: &CatmapError, parts: &[&str]) {
         assert!(text.contains(part), "error should mention {part:?}: {text}");
     }
 }
+
+/// Warnings logged (on this thread) while `f` runs, one line each, and `f`'s result.
+pub fn with_warnings<T>(f: impl FnOnce() -> T) -> (T, String) {
+    #[derive(Clone, Default)]
+    struct Sink(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
+    impl std::io::Write for Sink {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            self.0.lock().expect("not poisoned").extend_from_slice(buf);
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    let sink = Sink::default();
+    let writer = sink.clone();
+    let subscriber = tracing_subscriber::fmt()
+        .with_max_level(tracing::Level::WARN)
+        .with_ansi(false)
+        .with_writer(move || writer.clone())
+        .finish();
+    let result = tracing::subscriber::with_default(subscriber, f);
+    let text = String::from_utf8(sink.0.lock().expect("not poisoned").clone()).expect("utf-8 log");
+    (result, text)
+}

@@ -42,10 +42,10 @@ fn cheap_config(steps_per_frame: usize, after_stream: usize) -> MapperConfig {
 fn stream_scene(mapper: &mut Mapper, scene: &SyntheticScene) {
     for position in 0..scene.len() {
         mapper.push(scene.read_frame(position).expect("frame")).expect("push");
-        mapper.step();
+        mapper.step().expect("a tick");
     }
-    mapper.end_stream();
-    mapper.step();
+    mapper.end_stream().expect("a tick");
+    mapper.step().expect("a tick");
 }
 
 /// Mean total loss of the object fields at their latest step.
@@ -93,7 +93,10 @@ fn every_object_with_a_box_trains_online_and_its_loss_falls() {
     }
 
     let before = mean_object_loss(&mut mapper);
-    assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
+    assert_eq!(
+        mapper.run(|_| ControlFlow::Continue(())).expect("the run"),
+        RunOutcome::Complete
+    );
     let after = mean_object_loss(&mut mapper);
     assert_eq!(mapper.training_steps(), 2 * scene.len() as u64 + 150);
     assert!(after < 0.7 * before, "loss falls with training: {before} → {after}");
@@ -108,10 +111,12 @@ fn the_offline_protocol_trains_only_after_the_stream() {
     stream_scene(&mut mapper, &scene);
     assert_eq!(mapper.training_steps(), 0, "no step while streaming");
     let mut reported = Vec::new();
-    let outcome = mapper.run(|progress| {
-        reported.push((progress.phase, progress.done));
-        ControlFlow::Continue(())
-    });
+    let outcome = mapper
+        .run(|progress| {
+            reported.push((progress.phase, progress.done));
+            ControlFlow::Continue(())
+        })
+        .expect("the run");
     assert_eq!(outcome, RunOutcome::Complete);
     let reported: Vec<u64> = reported
         .iter()
@@ -133,7 +138,10 @@ fn final_meshes(offline_steps: usize) -> MapMeshes {
     config.fields.background_every = 10;
     let mut mapper = Mapper::new(config).expect("config");
     stream_scene(&mut mapper, &scene);
-    assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
+    assert_eq!(
+        mapper.run(|_| ControlFlow::Continue(())).expect("the run"),
+        RunOutcome::Complete
+    );
     mapper.extract_final_meshes().expect("final meshes")
 }
 

@@ -63,7 +63,7 @@ fn config() -> MapperConfig {
 
 fn push(mapper: &mut Mapper, sender: &Sender<StreamMessage>, frame: RgbdFrame) {
     sender.send(StreamMessage::Frame(Arc::new(frame))).expect("inbox open");
-    mapper.step();
+    mapper.step().expect("a tick");
 }
 
 /// Saves `mapper` to a fresh folder and returns the mapper restored from it, fed by `inbox`.
@@ -102,13 +102,16 @@ fn run(scene: &SyntheticScene, config: &MapperConfig, stops: &[Stop]) -> (MapMes
         }
     }
     sender.send(StreamMessage::End(Default::default())).expect("inbox open");
-    mapper.step();
+    mapper.step().expect("a tick");
     assert!(mapper.stream_ended());
     let mut stopped: Vec<Stop> = Vec::new();
-    while let RunOutcome::Paused(at) = mapper.run(|progress| match stop_in(progress.phase) {
-        Some(stop) if stops.contains(&stop) && !stopped.contains(&stop) => ControlFlow::Break(()),
-        _ => ControlFlow::Continue(()),
-    }) {
+    while let RunOutcome::Paused(at) = mapper
+        .run(|progress| match stop_in(progress.phase) {
+            Some(stop) if stops.contains(&stop) && !stopped.contains(&stop) => ControlFlow::Break(()),
+            _ => ControlFlow::Continue(()),
+        })
+        .expect("the run")
+    {
         stopped.extend(stop_in(at.phase));
         mapper = save_and_restore(mapper, crossbeam_channel::never());
     }

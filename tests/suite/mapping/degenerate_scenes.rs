@@ -4,7 +4,7 @@
 
 use catmap::dataset::FrameSource;
 use std::ops::ControlFlow;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use catmap::InstanceLabel;
 use catmap::dataset::stream::FrameStream;
@@ -12,30 +12,7 @@ use catmap::synth::{Preset, SyntheticScene};
 use catmap::{MapperConfig, ObjectId, RgbdFrame};
 use catmap_systems::{Mapper, RunOutcome};
 
-/// Warnings logged (on this thread) while `f` runs, one line each, and `f`'s result.
-fn with_warnings<T>(f: impl FnOnce() -> T) -> (T, String) {
-    #[derive(Clone, Default)]
-    struct Sink(Arc<Mutex<Vec<u8>>>);
-    impl std::io::Write for Sink {
-        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-            self.0.lock().expect("not poisoned").extend_from_slice(buf);
-            Ok(buf.len())
-        }
-        fn flush(&mut self) -> std::io::Result<()> {
-            Ok(())
-        }
-    }
-    let sink = Sink::default();
-    let writer = sink.clone();
-    let subscriber = tracing_subscriber::fmt()
-        .with_max_level(tracing::Level::WARN)
-        .with_ansi(false)
-        .with_writer(move || writer.clone())
-        .finish();
-    let result = tracing::subscriber::with_default(subscriber, f);
-    let text = String::from_utf8(sink.0.lock().expect("not poisoned").clone()).expect("utf-8 log");
-    (result, text)
-}
+use crate::common::with_warnings;
 
 /// Short training everywhere, category mode on.
 fn quick_config() -> MapperConfig {
@@ -69,11 +46,14 @@ fn map_frames(frames: Vec<RgbdFrame>) -> Mapper {
     let mut mapper = Mapper::new(quick_config()).expect("valid config");
     for frame in frames {
         mapper.push(frame).expect("valid frame");
-        mapper.step();
+        mapper.step().expect("a tick");
     }
-    mapper.end_stream();
-    mapper.step();
-    assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
+    mapper.end_stream().expect("a tick");
+    mapper.step().expect("a tick");
+    assert_eq!(
+        mapper.run(|_| ControlFlow::Continue(())).expect("the run"),
+        RunOutcome::Complete
+    );
     mapper
 }
 
@@ -325,7 +305,7 @@ fn a_stream_that_stops_mid_frame_keeps_what_was_mapped() {
     };
     let stream = FrameStream::spawn(Arc::new(source), (0..6).collect(), 2);
     let mut mapper = Mapper::with_inbox(quick_config(), stream.receiver.clone()).expect("valid config");
-    let (outcome, warnings) = with_warnings(|| mapper.run(|_| ControlFlow::Continue(())));
+    let (outcome, warnings) = with_warnings(|| mapper.run(|_| ControlFlow::Continue(())).expect("the run"));
     stream.join();
     assert_eq!(outcome, RunOutcome::Complete);
     assert!(warnings.contains("truncated"), "the error is reported: {warnings}");
@@ -371,7 +351,7 @@ fn a_reader_that_dies_ends_the_stream_instead_of_hanging() {
     };
     config.category_fields.enabled = false;
     let mut mapper = Mapper::with_inbox(config, stream.receiver.clone()).expect("valid config");
-    let (outcome, warnings) = with_warnings(|| mapper.run(|_| ControlFlow::Continue(())));
+    let (outcome, warnings) = with_warnings(|| mapper.run(|_| ControlFlow::Continue(())).expect("the run"));
     stream.join();
     assert_eq!(outcome, RunOutcome::Complete);
     assert!(warnings.contains("stopped without its end"), "warned: {warnings}");

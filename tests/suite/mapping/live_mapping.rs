@@ -70,10 +70,12 @@ fn a_slow_mapper_takes_the_newest_frames_counts_the_drops_and_ends_with_a_whole_
         let mut mapper = Mapper::with_inbox(live_config(), stream.receiver.clone()).expect("valid config");
         mapper.count_drops_from(Arc::clone(&stream.dropped));
         // Deliberately slow: every tick takes at least 40 ms more (5 frames' time at 200 fps).
-        let outcome = mapper.run(|_| {
-            std::thread::sleep(Duration::from_millis(40));
-            ControlFlow::Continue(())
-        });
+        let outcome = mapper
+            .run(|_| {
+                std::thread::sleep(Duration::from_millis(40));
+                ControlFlow::Continue(())
+            })
+            .expect("the run");
         stream.join();
         let meshes = mapper.extract_final_meshes().expect("final meshes");
         let _ = done.send((mapper, outcome, meshes));

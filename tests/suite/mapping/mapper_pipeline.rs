@@ -54,7 +54,7 @@ impl Pipeline {
         let frame = self.scene.read_frame(self.next).expect("synthetic frames render");
         self.next += 1;
         self.mapper.push(frame.clone()).expect("the frame is valid");
-        self.mapper.step();
+        self.mapper.step().expect("a tick");
         frame
     }
 
@@ -62,8 +62,8 @@ impl Pipeline {
         while self.next < self.frame_count() {
             self.step();
         }
-        self.mapper.end_stream();
-        self.mapper.step();
+        self.mapper.end_stream().expect("a tick");
+        self.mapper.step().expect("a tick");
         self.mapper.finish()
     }
 }
@@ -276,7 +276,10 @@ fn a_scene_on_disk_streams_through_the_reader_thread_like_pushed_frames() {
     };
     let stream = FrameStream::spawn(Arc::clone(&source), stream_positions(source.len(), 1, None), 2);
     let mut mapper = Mapper::with_inbox(config, stream.receiver.clone()).expect("valid config");
-    assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
+    assert_eq!(
+        mapper.run(|_| ControlFlow::Continue(())).expect("the run"),
+        RunOutcome::Complete
+    );
     stream.join();
     let streamed = mapper.finish();
     let pushed = Pipeline::new(Pipeline::default_config()).run_all();

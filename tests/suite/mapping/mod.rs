@@ -3,6 +3,7 @@
 
 mod checkpoint_resume;
 mod degenerate_scenes;
+mod failed_step;
 mod live_mapping;
 mod mapper_pipeline;
 mod object_merges;

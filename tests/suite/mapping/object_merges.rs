@@ -78,10 +78,10 @@ fn an_object_first_seen_by_halves_is_merged_into_one_with_its_first_id() {
         let frame = scene.read_frame(t).expect("synthetic frames render");
         seen_in += u64::from((0..frame.instances.len()).any(|i| frame.instances.object_at(i) == Some(object)));
         mapper.push(shown(t, frame, object)).expect("the frame is valid");
-        mapper.step();
+        mapper.step().expect("a tick");
     }
-    mapper.end_stream();
-    mapper.step();
+    mapper.end_stream().expect("a tick");
+    mapper.step().expect("a tick");
     let map = mapper.finish();
     assert_eq!(map.merges.len(), 1, "{:?}", map.merges);
     let ObjectMerge { frame, kept, absorbed } = map.merges[0];
@@ -119,7 +119,7 @@ fn a_map_whose_merged_object_had_a_field_is_checkpointed_and_restored() {
     for t in 0..10 {
         let frame = scene.read_frame(t).expect("synthetic frames render");
         mapper.push(shown(t, frame, object)).expect("the frame is valid");
-        mapper.step();
+        mapper.step().expect("a tick");
     }
     let before = mapper.snapshot();
     assert_eq!(before.merges.len(), 1, "{:?}", before.merges);

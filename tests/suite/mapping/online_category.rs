@@ -49,7 +49,7 @@ fn category_fields_start_and_train_while_the_scene_streams() {
             unlabel(&mut frame, LATE_CHAIR);
         }
         mapper.push(frame).expect("valid frame");
-        mapper.step();
+        mapper.step().expect("a tick");
         let fields = mapper.world().resource::<CategoryFields>();
         if !fields.members.is_empty() && first_field_at.is_none() {
             first_field_at = Some((position, fields.steps_done));

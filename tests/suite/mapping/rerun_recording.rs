@@ -75,11 +75,14 @@ fn a_saved_recording_holds_camera_images_and_object_entities() {
         mapper.set_recording(rec);
         for position in 0..scene.len() {
             mapper.push(scene.read_frame(position).expect("frame")).expect("push");
-            mapper.step();
+            mapper.step().expect("a tick");
         }
-        mapper.end_stream();
-        mapper.step();
-        assert_eq!(mapper.run(|_| ControlFlow::Continue(())), RunOutcome::Complete);
+        mapper.end_stream().expect("a tick");
+        mapper.step().expect("a tick");
+        assert_eq!(
+            mapper.run(|_| ControlFlow::Continue(())).expect("the run"),
+            RunOutcome::Complete
+        );
         assert_eq!(mapper.category_field_count(), 1, "one category field");
         let meshes = mapper.extract_final_meshes().expect("final meshes");
         assert!(meshes.background.is_some(), "the background field is meshed at the end");
@@ -177,7 +180,7 @@ fn record_ten_frames(footer: RrdFooter) -> (Vec<u8>, BTreeSet<String>) {
         mapper.set_recording(save_rrd(builder, &rrd, footer).expect("open the recording file"));
         for position in 0..10 {
             mapper.push(scene.read_frame(position).expect("frame")).expect("push");
-            mapper.step();
+            mapper.step().expect("a tick");
         }
         mapper.finish();
     }

@@ -6,7 +6,7 @@ use catmap::MapperConfig;
 use catmap::config::FieldConfig;
 use catmap::dataset::FrameSource;
 use catmap::synth::{Preset, SyntheticScene};
-use catmap::training::SchedulePolicy;
+use catmap::training::{PhaseEnd, SchedulePolicy};
 use catmap_systems::{Mapper, RunPhase};
 
 fn config(policy: SchedulePolicy) -> MapperConfig {
@@ -39,14 +39,14 @@ fn step_through(policy: SchedulePolicy) -> (Mapper, Vec<(RunPhase, u64, usize)>)
         mapper
             .push(scene.read_frame(position).expect("frame renders"))
             .expect("valid frame");
-        mapper.step();
+        mapper.step().expect("a tick");
     }
-    mapper.end_stream();
+    mapper.end_stream().expect("a tick");
     let mut ticks = Vec::new();
     while mapper.phase() != RunPhase::Done {
         assert!(ticks.len() < 100, "the run ends: {ticks:?}");
         let phase = mapper.phase();
-        mapper.step();
+        mapper.step().expect("a tick");
         ticks.push((phase, mapper.training_steps(), mapper.category_field_count()));
     }
     (mapper, ticks)
@@ -96,6 +96,12 @@ fn the_paper_schedule_steps_through_every_phase_in_order() {
         .find(|t| t.0 == RunPhase::CategorySetup)
         .expect("a setup tick");
     assert!(setup.2 > 0, "category fields exist after the setup tick: {ticks:?}");
+    let report = mapper.training_report();
+    assert_eq!(
+        (report.after_stream_end, report.category_end),
+        (Some(PhaseEnd::StepCap), Some(PhaseEnd::StepCap)),
+        "the paper's phases run their fixed steps"
+    );
     let meshes = mapper.extract_final_meshes().expect("final meshes");
     assert!(
         meshes.objects.len() >= 5,
@@ -103,7 +109,7 @@ fn the_paper_schedule_steps_through_every_phase_in_order() {
         meshes.objects.len()
     );
     let steps = mapper.training_steps();
-    mapper.step();
+    mapper.step().expect("a tick");
     assert_eq!(
         (mapper.phase(), mapper.training_steps()),
         (RunPhase::Done, steps),
@@ -119,9 +125,12 @@ fn the_fast_schedule_has_no_category_phase_and_ends_its_training_on_convergence_
         [RunPhase::Stream, RunPhase::AfterStream, RunPhase::Meshing]
     );
     let after = ticks.iter().filter(|t| t.0 == RunPhase::AfterStream).count();
-    assert!(
-        (1..=2).contains(&after),
-        "60 steps at most, in chunks of 50: {after} ticks"
+    assert_eq!(after, 2, "60 steps at most, in chunks of 50");
+    let report = mapper.training_report();
+    assert_eq!(
+        (report.after_stream_end, report.category_end),
+        (Some(PhaseEnd::StepCap), None),
+        "the fast schedule's training after the stream ends at its cap here, and it has no category phase"
     );
     assert!(!mapper.extract_final_meshes().expect("final meshes").objects.is_empty());
 }
