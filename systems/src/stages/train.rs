@@ -135,14 +135,14 @@ pub fn train_fields(
             );
             match step {
                 Ok(losses) => schedule.record_step(&plan.keys, &losses, &config.schedule.plateau),
-                Err(e) => return failed.record(TrainingStep::ObjectFields, queue.steps_done, e),
+                Err(e) => return failed.record(TrainingStep::ObjectFields, queue.steps_done, *e),
             }
         }
         if cfg.background_due(queue.steps_done) && !fields.background.is_empty() {
             let (plan, batch) = (BatchPlan::background(), (&mut fields.background, &mut Vec::new()));
             let (rays, meshing) = ((&cfg.background_rays, &ClassSizes::default()), &config.meshes.object);
             if let Err(e) = train_one(&mut owners, FieldOwner::Background, &plan, batch, rays, meshing) {
-                return failed.record(TrainingStep::Background, queue.steps_done, e);
+                return failed.record(TrainingStep::Background, queue.steps_done, *e);
             }
         }
         queue.steps_done += 1;
@@ -184,7 +184,7 @@ fn train_one(
     (batch, hidden): (&mut catmap::field::FieldBatch, &mut Vec<HiddenSpaceCache>),
     (rays, class_sizes): (&RaySamplerConfig, &ClassSizes),
     meshing: &ObjectMeshConfig,
-) -> Result<Vec<f32>, StepError> {
+) -> Result<Vec<f32>, Box<StepError>> {
     let indices = &plan.indices[..];
     let background = owner == FieldOwner::Background;
     let outside: Vec<FieldKey> = owners
@@ -217,7 +217,7 @@ fn train_one(
             batch.len()
         ));
         let fields = if outside.is_empty() { plan.keys.clone() } else { outside };
-        return Err(StepError { fields, error });
+        return Err(Box::new(StepError { fields, error }));
     }
     if !background && hidden.len() < batch.len() {
         hidden.resize_with(batch.len(), HiddenSpaceCache::default);
@@ -248,9 +248,11 @@ fn train_one(
         .collect();
     let losses = batch
         .train_step_scaled(indices, &plan.learning_rate_scales, &fields)
-        .map_err(|error| StepError {
-            fields: plan.keys.clone(),
-            error,
+        .map_err(|error| {
+            Box::new(StepError {
+                fields: plan.keys.clone(),
+                error,
+            })
         })?;
     for (((.., loss, _), latest), sampled) in work.iter_mut().zip(&losses).zip(&fields) {
         loss.latest = *latest;
