@@ -145,6 +145,16 @@ mod tests {
         let points = [Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0)];
         let err = robust_registration(&points, &points, &[(0, 0), (1, 1)], &RegistrationConfig::default())
             .expect_err("a pair of points fixes no rotation");
-        assert!(err.to_string().contains("needs 3"), "{err}");
+        assert!(
+            matches!(
+                err,
+                CatmapError::TooFew {
+                    needed: 3,
+                    found: 2,
+                    ..
+                }
+            ),
+            "{err}"
+        );
     }
 }
