@@ -69,7 +69,7 @@ pub struct ObjectConfig {
     pub round_objects: RoundObjects,
     /// A mask pixel whose depth lies more than `bleed_depth_m` beyond the nearest pixel of its
     /// object within this many pixels is a mask bleeding onto what lies behind, and becomes
-    /// unknown ([`crate::objects::mask_trim`]); 0 (the default) turns the check off: at 2 px it
+    /// unsure ([`crate::objects::mask_trim`]); 0 (the default) turns the check off: at 2 px it
     /// left the Kinect-like scene's boxes metres too large (holes at depth edges leave a bleed
     /// pixel no valid pixel of its object within reach).
     pub bleed_radius_px: u32,
@@ -104,8 +104,8 @@ pub struct ObjectConfig {
 }
 
 /// `objects.box_smoothing_m` for a depth camera's images (`catmap run --depth camera`): of 3, 5,
-/// 6.5, 8 and 12 cm, 8 cm did best on the Kinect-like default scene (docs/ROBUSTNESS.md, session
-/// 46).
+/// 6.5, 8 and 12 cm, 8 cm maps the Kinect-like default scene best over three mapper seeds
+/// (docs/ROBUSTNESS.md).
 pub const CAMERA_BOX_SMOOTHING_M: f32 = 0.08;
 
 /// Which of an object's cloud voxels (of at least `box_min_voxel_points` points) make its shape:
@@ -138,8 +138,8 @@ impl ObjectConfig {
     /// These settings for masks with `borders`: a segmenter's masks get the trim of bleeding
     /// pixels within 4 px (with 0.1 m of allowance per metre of depth) and a 2 px unsure band
     /// around every border — on the Kinect-like default scene 4.18 / 3.94 / 81.7 → 3.31 / 2.46 /
-    /// 90.9 (docs/ROBUSTNESS.md, session 32) — and boxes fitted to the cloud voxels that hold at
-    /// least 3 points (a pixel the band missed lands in a voxel of its own; session 38) that
+    /// 90.9 (docs/ROBUSTNESS.md) — and boxes fitted to the cloud voxels that hold at least 3
+    /// points (a pixel the band missed across a slanting edge lands in a voxel of its own) that
     /// most of their views saw as the object's, in its large connected parts
     /// ([`ShapeVoxels::MostlyOwnMainParts`]; docs/ROBUSTNESS.md); exact masks get none of it (the
     /// band costs thin parts every pixel).
@@ -167,7 +167,7 @@ pub enum RoundObjects {
     /// when no plane there matches and its points lie on circles about an axis in the first.
     #[default]
     AcrossAxis,
-    /// Only a plane whose reflections match (the mirror search alone, as before session 49).
+    /// Only a plane whose reflections match (the mirror search alone).
     Off,
 }
 

@@ -65,7 +65,7 @@ pub struct CategoryConfig {
 /// finds the true pose (1.4° off; completion 1.05 cm). A member whose normalised distance to
 /// its representative is above `above` (its twins': 0.014–0.02 on the clean default scene) is
 /// searched again so, and keeps the better alignment; the subcategory decision stays the first
-/// search's. Measured in docs/ROBUSTNESS.md (session 41).
+/// search's. Measured in docs/ROBUSTNESS.md.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SecondSearch {
