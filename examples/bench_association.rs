@@ -91,7 +91,7 @@ fn main() -> Result<()> {
     }
     .with_mask_borders(borders);
     let setup = Setup {
-        cfg: config.object_settings(),
+        cfg: config.objects.clone(),
         boxes: args.iter().any(|a| a == "--boxes"),
         depth_noise_per_m2: config.dataset.depth_noise_per_m2,
     };

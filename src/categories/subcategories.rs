@@ -47,10 +47,8 @@ pub struct SubcategoryRule {
     pub new_above: f32,
     /// In between, the member leaves when the reverse distance is above this.
     pub reverse_split_above: f32,
-    /// Which representative a member joins (see the module doc); unset: the schedule's
-    /// (`fast`: best, `paper`: first; [`crate::MapperConfig::category_registration`]), and
-    /// best where no schedule resolves it.
-    pub assignment: Option<SubcategoryAssignment>,
+    /// Which representative a member joins (see the module doc; `paper`: first).
+    pub assignment: SubcategoryAssignment,
     /// Under [`SubcategoryAssignment::Best`], a member whose two best candidates' two-way
     /// distances differ by less than this share of the better one keeps its own subcategory.
     pub undecided_margin: f32,
@@ -97,7 +95,7 @@ impl Default for SubcategoryRule {
             same_below: 0.06,
             new_above: 0.15,
             reverse_split_above: 0.12,
-            assignment: None,
+            assignment: SubcategoryAssignment::Best,
             undecided_margin: 0.1,
             unplaced_reverse: ReversePoints::LookedAt,
         }
@@ -105,9 +103,9 @@ impl Default for SubcategoryRule {
 }
 
 impl SubcategoryRule {
-    /// The assignment that applies: the set one, else [`SubcategoryAssignment::Best`].
+    /// The assignment that applies.
     pub fn assignment(&self) -> SubcategoryAssignment {
-        self.assignment.unwrap_or(SubcategoryAssignment::Best)
+        self.assignment
     }
 }
 

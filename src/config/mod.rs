@@ -1,11 +1,13 @@
-//! The one configuration tree. Defaults equal the paper's constants (METHOD.md); a TOML file lists
-//! only what it overrides, and unknown keys are errors.
+//! The one configuration tree. Its defaults are the `fast` profile, catmap's; `MapperConfig::paper()`
+//! is the paper's (METHOD.md). A TOML file lists only what it overrides, and unknown keys are errors.
 
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+pub mod layers;
 mod phases;
+mod profile;
 mod rerun;
 pub mod sensor_profile;
 
@@ -15,6 +17,7 @@ pub use crate::field::FieldConfig;
 pub use crate::field::category::{CategoryFieldConfig, CategoryRayBudget};
 pub use crate::meshing::MeshConfig;
 pub use crate::objects::config::{KeyframeConfig, ObjectConfig};
+pub use layers::SettingsLayers;
 pub use phases::{AfterStream, FirstPhase};
 pub use rerun::RerunConfig;
 
@@ -88,6 +91,23 @@ impl MapperConfig {
         })?;
         config.validate().map_err(|e| parse_error(0, e.to_string()))?;
         Ok(config)
+    }
+
+    /// Reads a config file's overrides as a table (for [`SettingsLayers::file`]), checked as
+    /// [`Self::load`] checks them: errors name the file and the line.
+    pub fn load_overrides(path: &Path) -> Result<toml::Table> {
+        Self::load(path)?;
+        let text = std::fs::read_to_string(path).map_err(|e| CatmapError::io(path, e))?;
+        toml::from_str(&text).map_err(|e| CatmapError::Parse {
+            path: path.to_path_buf(),
+            line: 0,
+            reason: e.message().trim().to_owned(),
+        })
+    }
+
+    /// The configuration as a TOML table, every field present.
+    pub fn to_table(&self) -> toml::Table {
+        toml::Table::try_from(self).expect("the config tree has only TOML-representable fields")
     }
 
     /// The configuration as TOML, every field present.

@@ -184,19 +184,14 @@ impl SensorChoice {
         }
     }
 
-    /// `config` with these settings: a flag's always, the probe's only where it found a camera,
-    /// a segmenter or per-frame ids (what the probe finds exact stays as the config file says).
+    /// `config` (a profile's settings) with these: the depth's, the masks' and the ids'. A config
+    /// file laid over them afterwards ([`super::layers`]) keeps what it sets.
+    /// The masks' settings come first: a depth camera's keeps at least 3 points per box voxel
+    /// whatever the masks.
     pub fn apply(&self, mut config: MapperConfig) -> MapperConfig {
-        if self.depth_chosen_by == ChosenBy::Flag || self.depth == DepthImages::Camera {
-            config = config.with_depth_images(self.depth);
-        }
-        if self.masks_chosen_by == ChosenBy::Flag || self.masks == MaskBorders::Segmenter {
-            config.objects = config.objects.clone().with_mask_borders(self.masks);
-        }
-        if self.instances_chosen_by == ChosenBy::Flag || self.instances == InstanceSource::PerFrame {
-            config.objects.association.instances = self.instances;
-        }
-        config
+        config.objects = config.objects.clone().with_mask_borders(self.masks);
+        config.objects.association.instances = self.instances;
+        config.with_depth_images(self.depth)
     }
 }
 

@@ -43,38 +43,32 @@ fn flags_win_and_the_probe_decides_the_rest() {
 }
 
 #[test]
-fn the_probes_exact_leaves_a_config_files_settings_and_a_camera_takes_the_cameras() {
-    let mut own = MapperConfig::default();
-    own.objects.mask_border_px = 1;
+fn a_choice_lays_the_sensors_settings_over_a_profile() {
+    let base = MapperConfig::default();
     let exact = SensorChoice::resolve(None, None, None, Some(profile(0.0003, 0.03)));
-    assert_eq!(
-        exact.apply(own.clone()),
-        own,
-        "what the probe finds exact stays as the file says"
-    );
-    let flagged = SensorChoice::resolve(
-        Some(DepthImages::Exact),
-        Some(MaskBorders::Exact),
-        Some(InstanceSource::Consistent),
-        None,
-    );
-    assert_eq!(
-        flagged.apply(own.clone()).objects.mask_border_px,
-        0,
-        "a flag always applies"
-    );
+    assert_eq!(exact.apply(base.clone()), base, "exact depth and masks are the profile's");
     let noisy = SensorChoice::resolve(None, None, None, Some(profile(0.006, 0.6)));
-    let expected = own.clone().with_depth_images(DepthImages::Camera);
-    let mut expected = MapperConfig {
-        objects: expected.objects.clone().with_mask_borders(MaskBorders::Segmenter),
-        ..expected
-    };
+    let mut expected = base.clone();
+    expected.objects = expected.objects.clone().with_mask_borders(MaskBorders::Segmenter);
     expected.objects.association.instances = InstanceSource::PerFrame;
+    let expected = expected.with_depth_images(DepthImages::Camera);
     assert_eq!(
-        noisy.apply(own),
+        noisy.apply(base.clone()),
         expected,
         "as --depth camera --masks segmenter --instances per-frame"
     );
+    let camera_exact_masks = SensorChoice::resolve(
+        Some(DepthImages::Camera),
+        Some(MaskBorders::Exact),
+        Some(InstanceSource::Consistent),
+        None,
+    )
+    .apply(base);
+    assert_eq!(
+        camera_exact_masks.objects.box_min_voxel_points, 3,
+        "a camera's strays are left out of the boxes whatever the masks"
+    );
+    assert_eq!(camera_exact_masks.objects.mask_border_px, 0);
 }
 
 #[test]

@@ -50,7 +50,7 @@ impl Default for FieldConfig {
             weight_decay: 0.013,
             object_scale: None,
             background_scale: None,
-            object_rays: RaySamplerConfig::OBJECT,
+            object_rays: RaySamplerConfig::FAST_OBJECT,
             background_rays: RaySamplerConfig::BACKGROUND,
             background_every: 0,
         }

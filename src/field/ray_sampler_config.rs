@@ -18,15 +18,14 @@ pub struct RaySamplerConfig {
     /// [`super::ray_sampler::OWN_PIXEL_TRIES`] draws each, uniform in the box; the rest uniform
     /// in the box, as vMAP). A thin part (a lamp's 2.6 cm pole, 3 % of its box) gets rays in
     /// proportion to its share of the object's pixels instead of the box's. Only objects alone
-    /// in their class draw them ([`super::sample_window_rays`] with a hidden space). `None`: the
-    /// schedule's choice ([`RaySamplerConfig::own_pixel_draws`]); 0: vMAP's draws.
-    pub own_pixel_draws: Option<usize>,
+    /// in their class draw them ([`super::sample_window_rays`] with a hidden space). 0: vMAP's
+    /// draws.
+    pub own_pixel_draws: usize,
     /// Stratified samples in free space before the surface, from the camera (vMAP's).
     pub free_samples: usize,
     /// Stratified free-space samples on the part of the ray inside the object's box before the
-    /// surface band (the carving sampler, [`super::free_space`]). `None`: the schedule's choice
-    /// ([`RaySamplerConfig::carving_samples`]); 0: vMAP's sampler.
-    pub box_free_samples: Option<usize>,
+    /// surface band (the carving sampler, [`super::free_space`]). 0: vMAP's sampler.
+    pub box_free_samples: usize,
     /// Samples around (own pixels) or just before and behind (other pixels) the measured depth.
     pub surface_samples: usize,
     /// Half-width of the surface band, metres (the Gaussian's σ is a third of it).
@@ -34,30 +33,27 @@ pub struct RaySamplerConfig {
     /// How far behind an occluder's depth a ray of another object's pixel is sampled, metres.
     pub behind_occluder_m: f32,
     /// Prior rays per step in the cells of the object's box that no view saw into, each sample
-    /// asked to be solid ([`crate::objects::hidden_space`]). `None`: the schedule's choice
-    /// ([`RaySamplerConfig::solid_prior_rays`]); 0: no solid prior.
-    pub hidden_solid_rays: Option<usize>,
+    /// asked to be solid ([`crate::objects::hidden_space`]). 0: no solid prior.
+    pub hidden_solid_rays: usize,
     /// Which hidden cells the solid prior draws from.
     pub hidden_cells: HiddenCells,
     /// Whether the cells no view saw under the object are hidden cells too.
     pub unseen_cells: UnseenCells,
     /// Prior rays per step under the object's box, below the lowest point it was seen at, each
     /// sample asked to be empty (what the object stands on: the region it is meshed in reaches
-    /// below the floor). `None`: the schedule's choice ([`RaySamplerConfig::below_support_rays`]);
-    /// 0: none.
-    pub below_support_rays: Option<usize>,
+    /// below the floor). 0: none.
+    pub below_support_rays: usize,
     /// Prior rays per step around the centres of the cells of the object's box that a view saw
-    /// free, each sample asked to be empty. `None`: the schedule's choice; 0: none.
-    pub seen_free_rays: Option<usize>,
+    /// free, each sample asked to be empty. 0: none.
+    pub seen_free_rays: usize,
     /// Which cells the seen-free prior draws from.
     pub free_cells: FreeCells,
     /// Mirrored pixel draws per step for an object with a vertical mirror plane: keyframe rays
     /// drawn as above and reflected across the plane, as if a camera on the other side had seen
     /// the mirror image (a sofa seen from one end learns the other end's shape and the free space
     /// before it). Only rays of the object's own pixels are kept, and not those whose reflected
-    /// surface point a view saw free. `None`: the schedule's choice
-    /// ([`RaySamplerConfig::mirror_rays`]); 0: none.
-    pub mirror_rays: Option<usize>,
+    /// surface point a view saw free. 0: none.
+    pub mirror_rays: usize,
     /// Which of the object's vertical mirror planes its rays are reflected across
     /// (`mirror_rays` across each).
     pub mirror_planes: MirrorPlanes,
@@ -81,7 +77,7 @@ pub enum UnsurePixels {
     /// pixel without depth gives no ray.
     #[default]
     FreeBeforeReturn,
-    /// No ray: the pixel teaches nothing (before session 51).
+    /// No ray: the pixel teaches nothing.
     Skipped,
 }
 
@@ -97,41 +93,55 @@ impl RaySamplerConfig {
     pub const OBJECT: Self = Self {
         keyframes_per_step: 5,
         pixels_per_keyframe: 24,
-        own_pixel_draws: None,
+        own_pixel_draws: 0,
         free_samples: 1,
-        box_free_samples: None,
+        box_free_samples: 0,
         surface_samples: 9,
         surface_band_m: 0.1,
         behind_occluder_m: 0.05,
-        hidden_solid_rays: None,
+        hidden_solid_rays: 0,
         hidden_cells: HiddenCells::Enclosed,
         unseen_cells: UnseenCells::HiddenUnderTheObject,
-        below_support_rays: None,
-        seen_free_rays: None,
+        below_support_rays: 0,
+        seen_free_rays: 0,
         free_cells: FreeCells::SeenOpenAndBeyond,
-        mirror_rays: None,
+        mirror_rays: 0,
         mirror_planes: MirrorPlanes::BothWhenFound,
         hidden_solid_weight: 1.0,
         unsure_pixels: UnsurePixels::FreeBeforeReturn,
+    };
+
+    /// catmap's object sampler (the `fast` profile's): vMAP's, with 3 box samples per ray, 8 rays
+    /// per step for each of the solid, seen-free and support priors, 24 mirrored rays, and 8 of
+    /// each keyframe's 24 pixels drawn among the object's own (the priors, mirrored rays and own
+    /// pixels only for objects alone in their class).
+    pub const FAST_OBJECT: Self = Self {
+        box_free_samples: 3,
+        hidden_solid_rays: 8,
+        seen_free_rays: 8,
+        below_support_rays: 8,
+        mirror_rays: 24,
+        own_pixel_draws: 8,
+        ..Self::OBJECT
     };
 
     /// vMAP's background sampler: 5 keyframes × 240 pixels (1 200 rays), 5 + 9 samples per ray.
     pub const BACKGROUND: Self = Self {
         keyframes_per_step: 5,
         pixels_per_keyframe: 240,
-        own_pixel_draws: None,
+        own_pixel_draws: 0,
         free_samples: 5,
-        box_free_samples: Some(0),
+        box_free_samples: 0,
         surface_samples: 9,
         surface_band_m: 0.1,
         behind_occluder_m: 0.05,
-        hidden_solid_rays: None,
+        hidden_solid_rays: 0,
         hidden_cells: HiddenCells::Enclosed,
         unseen_cells: UnseenCells::HiddenUnderTheObject,
-        below_support_rays: None,
-        seen_free_rays: None,
+        below_support_rays: 0,
+        seen_free_rays: 0,
         free_cells: FreeCells::SeenAndOpen,
-        mirror_rays: None,
+        mirror_rays: 0,
         mirror_planes: MirrorPlanes::BothWhenFound,
         hidden_solid_weight: 1.0,
         unsure_pixels: UnsurePixels::FreeBeforeReturn,
@@ -142,70 +152,40 @@ impl RaySamplerConfig {
         self.free_samples + self.carving_samples() + self.surface_samples
     }
 
-    /// The box samples this sampler draws (an unset count draws none: the mapper's config sets
-    /// it from the schedule before sampling, `MapperConfig::object_rays`).
+    /// The box samples this sampler draws.
     pub fn carving_samples(&self) -> usize {
-        self.box_free_samples.unwrap_or(0)
+        self.box_free_samples
     }
 
-    /// The same sampler with an unset box sample count set to `samples`.
-    pub fn with_default_carving(mut self, samples: usize) -> Self {
-        self.box_free_samples.get_or_insert(samples);
-        self
-    }
-
-    /// The solid prior's rays per step (unset: none; the mapper's config sets them from the
-    /// schedule, `MapperConfig::object_rays`).
+    /// The solid prior's rays per step.
     pub fn solid_prior_rays(&self) -> usize {
-        self.hidden_solid_rays.unwrap_or(0)
+        self.hidden_solid_rays
     }
 
-    /// The seen-free prior's rays per step (unset: none, as for the solid prior).
+    /// The seen-free prior's rays per step.
     pub fn seen_free_rays(&self) -> usize {
-        self.seen_free_rays.unwrap_or(0)
+        self.seen_free_rays
     }
 
-    /// The support prior's rays per step (unset: none, as for the solid prior).
+    /// The support prior's rays per step.
     pub fn below_support_rays(&self) -> usize {
-        self.below_support_rays.unwrap_or(0)
+        self.below_support_rays
     }
 
-    /// The pixels per keyframe drawn among the object's own (unset: none, as for the solid
-    /// prior).
+    /// The pixels per keyframe drawn among the object's own.
     pub fn own_pixel_draws(&self) -> usize {
-        self.own_pixel_draws.unwrap_or(0)
+        self.own_pixel_draws
     }
 
     /// The same sampler drawing `draws` pixels per keyframe among the object's own.
     pub fn with_own_pixel_draws(mut self, draws: usize) -> Self {
-        self.own_pixel_draws = Some(draws);
+        self.own_pixel_draws = draws;
         self
     }
 
-    /// The same sampler with an unset own-pixel draw count set to `draws`.
-    pub fn with_default_own_pixel_draws(mut self, draws: usize) -> Self {
-        self.own_pixel_draws.get_or_insert(draws);
-        self
-    }
-
-    /// The mirrored rays per step (unset: none, as for the solid prior).
+    /// The mirrored rays per step.
     pub fn mirror_rays(&self) -> usize {
-        self.mirror_rays.unwrap_or(0)
-    }
-
-    /// The same sampler with an unset mirrored ray count set to `rays`.
-    pub fn with_default_mirror_rays(mut self, rays: usize) -> Self {
-        self.mirror_rays.get_or_insert(rays);
-        self
-    }
-
-    /// The same sampler with unset prior ray counts set: the solid prior's, the seen-free
-    /// prior's and the support prior's rays per step.
-    pub fn with_default_priors(mut self, [solid, seen_free, below_support]: [usize; 3]) -> Self {
-        self.hidden_solid_rays.get_or_insert(solid);
-        self.seen_free_rays.get_or_insert(seen_free);
-        self.below_support_rays.get_or_insert(below_support);
-        self
+        self.mirror_rays
     }
 
     /// Rays per step when every keyframe slot is filled.
@@ -216,6 +196,6 @@ impl RaySamplerConfig {
 
 impl Default for RaySamplerConfig {
     fn default() -> Self {
-        Self::OBJECT
+        Self::FAST_OBJECT
     }
 }

@@ -126,7 +126,7 @@ fn box_samples_carve_the_part_of_each_ray_inside_the_box_before_the_surface() {
     };
     let draw = |box_free_samples| {
         let cfg = RaySamplerConfig {
-            box_free_samples: Some(box_free_samples),
+            box_free_samples: box_free_samples,
             ..RaySamplerConfig::OBJECT
         };
         let mut rng = ChaCha8Rng::seed_from_u64(5);
@@ -288,7 +288,7 @@ fn mirrored_rays_see_the_mirror_image_unless_a_view_saw_it_free() {
     let plane = MirrorPlane::vertical(0.0, 0.0);
     let in_front = render([0.25, -1.0, 0.2], 0.0, &scene);
     let cfg = RaySamplerConfig {
-        box_free_samples: Some(0),
+        box_free_samples: 0,
         ..RaySamplerConfig::OBJECT
     }
     .with_rays_per_step(4000);
@@ -327,7 +327,7 @@ fn a_mirrored_ray_that_passes_a_thin_pole_before_its_surface_is_dropped() {
     }];
     let view = render([0.426, 1.0, 0.5], -std::f32::consts::FRAC_PI_2, &scene);
     let cfg = RaySamplerConfig {
-        box_free_samples: Some(0),
+        box_free_samples: 0,
         ..RaySamplerConfig::OBJECT
     }
     .with_rays_per_step(4000);
@@ -359,7 +359,7 @@ fn own_pixel_draws_put_rays_on_a_thin_object_that_the_box_draws_rarely_hit() {
     let share = |own_pixel_draws: usize| {
         let cfg = RaySamplerConfig {
             keyframes_per_step: 1,
-            own_pixel_draws: Some(own_pixel_draws),
+            own_pixel_draws: own_pixel_draws,
             ..RaySamplerConfig::OBJECT
         };
         let (mut own, mut all) = (0, 0);
@@ -394,7 +394,7 @@ fn own_pixel_draws_put_rays_on_a_thin_object_that_the_box_draws_rarely_hit() {
     );
     let cfg = RaySamplerConfig {
         keyframes_per_step: 1,
-        own_pixel_draws: Some(24),
+        own_pixel_draws: 24,
         ..RaySamplerConfig::OBJECT
     };
     let post_box = aabb([-0.05, 1.15, -1.0], [0.05, 1.25, 1.0]);

@@ -49,6 +49,9 @@ pub struct ObjectMeshConfig {
 /// The occupancy at which an object's surface is meshed (see the module doc).
 pub const SURFACE_OCCUPANCY: f32 = 0.75;
 
+/// The occupancy at which the paper meshes an object's surface (METHOD.md §6).
+pub const PAPER_SURFACE_OCCUPANCY: f32 = 0.5;
+
 /// The lowest coarse occupancy that still makes a block worth refining.
 const REFINE_ABOVE: f32 = 0.05;
 

@@ -54,9 +54,8 @@ pub struct ObjectConfig {
     pub background_pixel_stride: u32,
     /// Voxel edge of the background's observed cloud, metres.
     pub background_voxel_m: f32,
-    /// How the oriented box is fitted to the thinned cloud. `None`: the schedule's choice
-    /// ([`crate::config::MapperConfig::object_settings`]).
-    pub box_fit: Option<BoxFit>,
+    /// How the oriented box is fitted to the thinned cloud (`paper`: the minimum-volume box).
+    pub box_fit: BoxFit,
     /// How an upright box (`box_fit` `upright_on_faces`) is turned once its rectangle is fitted:
     /// `rectangle` (the default, exact depth), or `face_normals` under `--depth camera` — an
     /// object made mostly of upright faces turned to their normals' median turn (a depth
@@ -172,11 +171,10 @@ pub enum RoundObjects {
 }
 
 /// How an object's oriented box is fitted to its observed cloud.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum BoxFit {
     /// The minimum-volume box (METHOD.md §2): it leans when a partly seen object's cloud does.
-    #[default]
     MinimumVolume,
     /// The upright box of least footprint (z along world z): furniture stands upright.
     Upright,
@@ -201,7 +199,7 @@ impl Default for ObjectConfig {
             voxel_votes: VoxelVotes::default(),
             background_pixel_stride: 4,
             background_voxel_m: 0.05,
-            box_fit: None,
+            box_fit: BoxFit::UprightOnFaces,
             box_turn: BoxTurn::Rectangle,
             round_objects: RoundObjects::AcrossAxis,
             bleed_radius_px: 0,

@@ -256,7 +256,7 @@ pub fn fit_object_box(cloud: &ObservedCloud, cfg: &ObjectConfig) -> Result<Orien
 pub fn fit_box_to_points(shape: Vec<Point3<f32>>, cfg: &ObjectConfig) -> Result<(OrientedBox, Vec<Point3<f32>>)> {
     let shape = on_local_surfaces(shape, cfg.box_smoothing_m);
     let thinned = voxel_downsample(&shape, cfg.bounds_voxel_m);
-    let oriented_box = match cfg.box_fit.unwrap_or_default() {
+    let oriented_box = match cfg.box_fit {
         BoxFit::MinimumVolume => fit_minimum_volume_box(&thinned)?,
         BoxFit::Upright => fit_upright_box(&thinned)?,
         BoxFit::UprightOnFaces => fit_upright_box_on_faces(&thinned, cfg.box_turn)?,

@@ -1,9 +1,7 @@
 //! The `catmap` command line: `run` maps a dataset (or a synthetic scene), `synth` writes a
-//! synthetic scene, `config` prints the default configuration.
+//! synthetic scene, `config` prints the default configuration (or a run's, resolved).
 
-use std::path::PathBuf;
 
-use anyhow::Context as _;
 use clap::{Parser, Subcommand};
 
 mod cli;
@@ -38,8 +36,9 @@ enum Command {
     Eval(cli::eval::EvalArgs),
     /// Compare two runs' metrics.json side by side (per class, repeated vs unique objects, all).
     Compare(cli::compare::CompareArgs),
-    /// Print the default configuration as TOML (a config file lists only what it changes).
-    Config,
+    /// Print the default configuration as TOML (a config file lists only what it changes), or
+    /// with --resolved the settings `catmap run` with the same options maps with.
+    Config(cli::config::ConfigArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -57,8 +56,8 @@ fn main() -> anyhow::Result<()> {
         Command::Synth(args) => cli::synth::synth(&args),
         Command::Eval(args) => cli::eval::eval(&args),
         Command::Compare(args) => cli::compare::compare(&args),
-        Command::Config => {
-            print_stdout(&catmap::MapperConfig::default().to_toml());
+        Command::Config(args) => {
+            print_stdout(&cli::config::config(&args)?);
             Ok(())
         }
     }
@@ -68,15 +67,6 @@ fn main() -> anyhow::Result<()> {
 #[expect(clippy::print_stdout, reason = "the CLI prints its results")]
 fn print_stdout(text: &str) {
     print!("{text}");
-}
-
-/// Reads a config file (TOML, overrides only), or the defaults.
-fn load_config(path: Option<&PathBuf>) -> anyhow::Result<catmap::MapperConfig> {
-    match path {
-        None => Ok(catmap::MapperConfig::default()),
-        // The error names the file (and the line of a TOML error).
-        Some(path) => catmap::MapperConfig::load(path).context("cannot load the config"),
-    }
 }
 
 #[cfg(test)]

@@ -296,7 +296,7 @@ fn the_best_explanation_pass_keeps_its_own_pairs_until_a_cloud_grows_by_the_grow
         (4, Design::DiningTable, 4),
     ]);
     let mut cfg = starting(RegistrationStart::Search);
-    cfg.subcategories.assignment = Some(SubcategoryAssignment::Best);
+    cfg.subcategories.assignment = SubcategoryAssignment::Best;
     let first = register_class(&members, &first_time(), &cfg, 7).unwrap();
     assert_eq!(
         groups(&first),

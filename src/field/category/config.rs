@@ -39,16 +39,15 @@ pub struct CategoryFieldConfig {
     pub ray_budget: CategoryRayBudget,
     /// Solid-prior rays per member and step in the cells of its box that no member of its field
     /// saw into (`catmap::categories::member_hidden`; the object sampler's `hidden_cells` pick
-    /// them, its `hidden_solid_weight` weighs them). `None`: the schedule's choice (the object
-    /// sampler's prior rays under `fast`, none under `paper`); 0: none.
-    pub hidden_solid_rays: Option<usize>,
+    /// them, its `hidden_solid_weight` weighs them). 0: none (`paper`).
+    pub hidden_solid_rays: usize,
     /// The share of a member's box those cells must make up for it to take them: a side of the
     /// design no member's camera faced (the drawer fronts of two nightstands seen from behind:
     /// 75–82 % of their boxes), not a layer under a chair's seat (at most 6 %).
     pub min_hidden_share: f64,
     /// Whether a member's cells no view saw under it count as hidden (as the object sampler's
     /// `unseen_cells` for an object alone in its class). Unknown by default: on living seed 0
-    /// the rule moved a nightstand's completion 1.30 → 1.45 cm (session 42).
+    /// the rule moved a nightstand's completion 1.30 → 1.45 cm.
     pub unseen_cells: UnseenCells,
 }
 
@@ -61,7 +60,7 @@ impl Default for CategoryFieldConfig {
             shape_codes: ShapeCodes::Shared,
             rays_per_object: 120,
             ray_budget: CategoryRayBudget::PerMember,
-            hidden_solid_rays: None,
+            hidden_solid_rays: 8,
             min_hidden_share: 0.25,
             unseen_cells: UnseenCells::Unknown,
         }

@@ -9,6 +9,8 @@ use anyhow::Context as _;
 use crate::cli::run_plan::{DatasetFormat, MapMode, Recording, RunPlan};
 use crate::cli::sensor_choice::sensor_choice;
 use crate::cli::synth::{PresetArg, write_scene};
+use catmap::config::SettingsLayers;
+use catmap::config::layers::set;
 
 /// Arguments of `catmap run`.
 #[derive(clap::Args, Debug)]
@@ -122,6 +124,15 @@ pub enum InstancesArg {
     PerFrame,
 }
 
+impl From<InstancesArg> for catmap::objects::instance_association::InstanceSource {
+    fn from(instances: InstancesArg) -> Self {
+        match instances {
+            InstancesArg::Consistent => Self::Consistent,
+            InstancesArg::PerFrame => Self::PerFrame,
+        }
+    }
+}
+
 /// `--masks` values.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MasksArg {
@@ -173,7 +184,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         return crate::cli::run_phases::resume(out);
     }
     let started = Instant::now();
-    let config = config_from_args(args)?;
+    let mut layers = layers_from_args(args)?;
+    let config = resolved(&layers, args.format)?;
     let dataset = match &args.dataset {
         Some(dir) => dir.clone(),
         None => args.out.join("scene"),
@@ -224,7 +236,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let given =
         args.instances.is_some() || instances == catmap::objects::instance_association::InstanceSource::PerFrame;
     let choice = sensor_choice(args.depth, args.masks, given.then_some(instances), raw.as_ref());
-    let config = choice.apply(config);
+    layers.sensor = Some(choice.clone());
+    let config = resolved(&layers, args.format)?;
     plan.sensor = Some(choice);
     let dataset_config = &config.dataset;
     let source = catmap::dataset::smoothed_depth::with_depth_smoothing(
@@ -241,65 +254,96 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     )
 }
 
-/// The configuration: the config file (or the defaults) with the command line's overrides.
-fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
-    let mut config = crate::load_config(args.config.as_ref())?;
+/// The run's layers of settings above its profile: the config file's overrides and the flags'
+/// (the sensor's are added once the dataset is probed, [`run`]).
+pub fn layers_from_args(args: &RunArgs) -> anyhow::Result<SettingsLayers> {
+    let file = match &args.config {
+        None => toml::Table::new(),
+        // The error names the file (and the line of a TOML error).
+        Some(path) => catmap::MapperConfig::load_overrides(path).context("cannot load the config")?,
+    };
+    let mut flags = toml::Table::new();
+    let f = &mut flags;
     if let Some(seed) = args.seed {
-        config.seed = seed;
+        set(f, "seed", value(&seed)?);
     }
     if let Some(stride) = args.stride {
-        config.stream.stride = stride;
+        set(f, "stream.stride", value(&stride)?);
     }
     if let Some(max_frames) = args.max_frames {
-        config.stream.max_frames = Some(max_frames);
+        set(f, "stream.max_frames", value(&max_frames)?);
     }
-    config.stream.live.enabled |= args.live;
-    if let Some(instances) = args.instances {
-        config.objects.association.instances = match instances {
-            InstancesArg::Consistent => catmap::objects::instance_association::InstanceSource::Consistent,
-            InstancesArg::PerFrame => catmap::objects::instance_association::InstanceSource::PerFrame,
-        };
+    if args.live {
+        set(f, "stream.live.enabled", true);
     }
     if let Some(fps) = args.fps {
-        config.stream.live.fps = Some(fps);
+        set(f, "stream.live.fps", fps);
+    }
+    if let Some(instances) = args.instances {
+        let source = catmap::objects::instance_association::InstanceSource::from(instances);
+        set(f, "objects.association.instances", value(&source)?);
     }
     match args.mode {
         MapMode::Category => {
-            config.categories.enabled = true;
-            config.category_fields.enabled = true;
+            set(f, "categories.enabled", true);
+            set(f, "category_fields.enabled", true);
         }
         // Registration alone (categories.json) stays as the config file says.
-        MapMode::Instance => config.category_fields.enabled = false,
+        MapMode::Instance => set(f, "category_fields.enabled", false),
     }
     if let Some(iterations) = args.category_iterations {
-        config.category_fields.iterations = iterations;
+        set(f, "category_fields.iterations", value(&iterations)?);
     }
     if let Some(choice) = args.representative {
-        config.categories.representative = match choice {
+        let choice = match choice {
             Representative::Uncertainty => catmap::categories::uncertainty::RepresentativeChoice::Uncertainty,
             Representative::Random => catmap::categories::uncertainty::RepresentativeChoice::Random,
         };
+        set(f, "categories.representative", value(&choice)?);
     }
     if let Some(schedule) = args.schedule {
-        config.schedule.policy = match schedule {
+        let policy = match schedule {
             ScheduleArg::Fast => catmap::training::SchedulePolicy::Fast,
             ScheduleArg::Paper => catmap::training::SchedulePolicy::Paper,
         };
+        set(f, "schedule.policy", value(&policy)?);
     }
     if let Some(switch) = args.subcategories {
-        config.categories.subcategories.enabled = switch == Switch::On;
+        set(f, "categories.subcategories.enabled", switch == Switch::On);
     }
-    config.fields.offline |= args.offline;
+    if args.offline {
+        set(f, "fields.offline", true);
+    }
     if let Some(iterations) = args.iterations {
-        config.fields.offline_iterations = iterations;
+        set(f, "fields.offline_iterations", value(&iterations)?);
     }
-    if args.format == DatasetFormat::Scannet {
+    Ok(SettingsLayers {
+        sensor: None,
+        file,
+        flags,
+    })
+}
+
+/// A flag's value as TOML (a seed above 2⁶³ − 1 is none).
+fn value<T: serde::Serialize + std::fmt::Debug>(v: &T) -> anyhow::Result<toml::Value> {
+    toml::Value::try_from(v).with_context(|| format!("{v:?} is not a value a setting can take"))
+}
+
+/// The settings `layers` resolve to, with the encoding scales of a ScanNet dataset.
+pub fn resolved(layers: &SettingsLayers, format: DatasetFormat) -> anyhow::Result<catmap::MapperConfig> {
+    let mut config = layers.resolve().context("invalid settings")?;
+    if format == DatasetFormat::Scannet {
         config.fields = config
             .fields
             .with_default_scales(catmap::config::FieldConfig::SCANNET_SCALES);
     }
-    config.validate().context("invalid settings")?;
     Ok(config)
+}
+
+/// The settings of `args` without a sensor probe (exact depth and masks unless a config file
+/// or a flag says otherwise).
+fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
+    resolved(&layers_from_args(args)?, args.format)
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@ use catmap::sensor::depth_smoothing::DepthImages;
 
 use catmap::objects::instance_association::InstanceSource;
 
-use crate::cli::run::{DepthArg, MasksArg};
+use crate::cli::run::{DepthArg, InstancesArg, MasksArg};
 
 /// The depth, mask and id settings: `--depth` and `--masks` where given, `instances` where
 /// `--instances` was given (or a config file said per-frame), else what a probe of the dataset's
@@ -18,14 +18,7 @@ pub fn sensor_choice(
     instances: Option<InstanceSource>,
     source: &dyn catmap::dataset::FrameSource,
 ) -> SensorChoice {
-    let depth = depth.map(|d| match d {
-        DepthArg::Exact => DepthImages::Exact,
-        DepthArg::Camera => DepthImages::Camera,
-    });
-    let masks = masks.map(|m| match m {
-        MasksArg::Exact => MaskBorders::Exact,
-        MasksArg::Segmenter => MaskBorders::Segmenter,
-    });
+    let (depth, masks) = (depth.map(depth_images), masks.map(mask_borders));
     let profile = (depth.is_none() || masks.is_none() || instances.is_none()).then(|| SensorProfile::probe(source));
     if let Some(profile) = &profile {
         let noise = profile.depth_noise;
@@ -42,4 +35,29 @@ pub fn sensor_choice(
     let choice = SensorChoice::resolve(depth, masks, instances, profile);
     tracing::info!(depth = ?choice.depth, by = ?choice.depth_chosen_by, masks = ?choice.masks, masks_by = ?choice.masks_chosen_by, instances = ?choice.instances, instances_by = ?choice.instances_chosen_by, "sensor settings");
     choice
+}
+
+/// The flags' depth, mask and id settings alone, exact and consistent where a flag is missing
+/// (`catmap config --resolved` without a dataset to probe).
+pub fn flagged_choice(depth: Option<DepthArg>, masks: Option<MasksArg>, instances: Option<InstancesArg>) -> SensorChoice {
+    SensorChoice::resolve(
+        depth.map(depth_images),
+        masks.map(mask_borders),
+        instances.map(InstanceSource::from),
+        None,
+    )
+}
+
+fn depth_images(depth: DepthArg) -> DepthImages {
+    match depth {
+        DepthArg::Exact => DepthImages::Exact,
+        DepthArg::Camera => DepthImages::Camera,
+    }
+}
+
+fn mask_borders(masks: MasksArg) -> MaskBorders {
+    match masks {
+        MasksArg::Exact => MaskBorders::Exact,
+        MasksArg::Segmenter => MaskBorders::Segmenter,
+    }
 }

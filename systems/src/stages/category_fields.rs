@@ -100,12 +100,12 @@ pub fn train_category_fields(
         .scheduler
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
     schedule.planned_categories = plan.indices.len();
-    let rays = fields.member_rays(objects.iter().count(), &config.category_fields, &config.object_rays());
+    let rays = fields.member_rays(objects.iter().count(), &config.category_fields, &config.fields.object_rays);
     let meshing = &config.meshes.object;
     let prior = MemberPrior {
-        solid_rays: config.member_solid_rays(),
+        solid_rays: config.category_fields.hidden_solid_rays,
         cells: CellRules {
-            hidden: config.object_rays().hidden_cells,
+            hidden: config.fields.object_rays.hidden_cells,
             unseen: config.category_fields.unseen_cells,
             // Members draw no seen-free cells: the library sets that rule itself.
             ..CellRules::default()

@@ -62,7 +62,7 @@ pub fn refresh_object_bounds(
 ) {
     let _timer = times.start("bounds");
     let class_sizes = class_sizes(categories.iter().map(|c| &c.members[..]));
-    let mirror_rays = settings.0.object_rays().mirror_rays();
+    let mirror_rays = settings.0.fields.object_rays.mirror_rays();
     let clouds = objects.iter().map(|(entity, object, cloud, bounds)| {
         (
             (entity, object.id),
@@ -72,7 +72,7 @@ pub fn refresh_object_bounds(
             &cloud.0,
         )
     });
-    for ((entity, id), fitted) in refit_stale_boxes(clouds, progress.phase(), &settings.0.object_settings()) {
+    for ((entity, id), fitted) in refit_stale_boxes(clouds, progress.phase(), &settings.0.objects) {
         let fitted = match fitted {
             Ok(fitted) => ObjectBounds {
                 oriented_box: fitted.oriented_box,

@@ -45,13 +45,13 @@ pub fn register_categories(
         growth: config.categories.reregister_growth,
         shape: config.objects.shape_rule(),
     };
-    let registration = config.category_registration();
+    let registration = &config.categories;
     for (entity, category, previous) in &mut categories {
         let class = category.class;
         let Some((members, last)) = due_class(category, previous.as_deref(), &index, &objects, &due) else {
             continue;
         };
-        match update_class(class, &members, &last, &fields.objects, &registration, config.seed) {
+        match update_class(class, &members, &last, &fields.objects, registration, config.seed) {
             Ok(update) => {
                 times.add("uncertainty", update.uncertainty_time);
                 times.add("register", update.register_time);

@@ -122,7 +122,7 @@ pub fn train_fields(
         .scheduler
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
     schedule.planned_objects = plan.indices.len();
-    let object_rays = config.object_rays();
+    let object_rays = config.fields.object_rays;
     for _ in 0..std::mem::take(&mut queue.pending) {
         if !plan.indices.is_empty() {
             let step = train_one(

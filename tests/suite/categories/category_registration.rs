@@ -11,7 +11,6 @@ use catmap::config::FieldConfig;
 use catmap::dataset::FrameSource;
 use catmap::registration::cube_rotations;
 use catmap::synth::{Design, Preset, SyntheticScene};
-use catmap::training::SchedulePolicy;
 use catmap::{MapperConfig, ObjectId};
 use catmap_systems::categories_report::ClassRecord;
 use nalgebra::{Matrix3, Matrix4, Point3};
@@ -25,15 +24,12 @@ fn map_default_scene() -> (SyntheticScene, Vec<ClassRecord>, BTreeMap<String, f6
             offline_iterations: 500,
             ..FieldConfig::default()
         },
-        ..MapperConfig::default()
+        ..MapperConfig::paper()
     };
-    // The paper's fixed protocol: exactly the 500 steps (the fast schedule trains until the
-    // fields converge).
-    config.schedule.policy = SchedulePolicy::Paper;
     // Members join the representative that explains them best (the fast schedule's rule): on
     // this scene the paper's first acceptance leaves ladder-back chair 2, seen at 20 % and
     // ranked first, alone and makes a second group of its design.
-    config.categories.subcategories.assignment = Some(SubcategoryAssignment::Best);
+    config.categories.subcategories.assignment = SubcategoryAssignment::Best;
     config.categories.enabled = true;
     config.category_fields.enabled = false; // registration only
     let mut mapper = crate::common::mapping::map_scene(&scene, (0..scene.len()).step_by(4), config);

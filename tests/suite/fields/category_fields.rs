@@ -11,7 +11,6 @@ use catmap::dataset::FrameSource;
 use catmap::metrics::{Crop, score_object};
 use catmap::rng::{RngStream, seeded_rng};
 use catmap::synth::{Preset, SyntheticScene};
-use catmap::training::SchedulePolicy;
 use catmap::{MapperConfig, ObjectId};
 
 const SEED: u64 = 5;
@@ -30,12 +29,9 @@ fn completion_per_object(
             offline_iterations: instance_steps,
             ..FieldConfig::default()
         },
-        ..MapperConfig::default()
+        ..MapperConfig::paper()
     };
     config.meshes.object.voxel_size_m = 0.01;
-    // The paper's fixed protocol, so that both modes train exactly the steps compared (the fast
-    // schedule would train every field until it converges, in one phase).
-    config.schedule.policy = SchedulePolicy::Paper;
     config.category_fields.enabled = category_steps > 0; // instance mode without category steps
     if category_steps > 0 {
         config.categories.enabled = true;

@@ -9,7 +9,6 @@ use catmap::dataset::FrameSource;
 use catmap::meshing::MapMeshes;
 use catmap::metrics::{Crop, evaluate_dirs};
 use catmap::synth::{Preset, SyntheticScene, write_replica_layout};
-use catmap::training::SchedulePolicy;
 use catmap::{MapperConfig, ObjectId};
 use catmap_systems::components::{FieldLoss, FieldSlot, Object, ObjectBounds};
 use catmap_systems::{Mapper, RunOutcome, RunPhase};
@@ -27,12 +26,9 @@ fn cheap_config(steps_per_frame: usize, after_stream: usize) -> MapperConfig {
             offline_iterations: after_stream,
             ..FieldConfig::default()
         },
-        ..MapperConfig::default()
+        ..MapperConfig::paper()
     };
     config.category_fields.enabled = false; // the per-object fields alone
-    // Every field trains every step, and the phase after the stream runs its configured steps
-    // (`final_steps` online, `offline_iterations` offline) to the end.
-    config.schedule.policy = SchedulePolicy::Paper;
     config.meshes.preview_every_frames = 0;
     config.meshes.object.voxel_size_m = 0.02;
     config.meshes.background_voxel_m = 0.2;

@@ -51,12 +51,12 @@ fn config() -> MapperConfig {
     config.meshes.background_voxel_m = 0.1;
     // The priors of objects without a twin, whose hidden cells are not checkpointed but
     // recomputed from the restored keyframes and boxes.
-    config.fields.object_rays.hidden_solid_rays = Some(4);
-    config.fields.object_rays.below_support_rays = Some(2);
-    config.fields.object_rays.seen_free_rays = Some(2);
+    config.fields.object_rays.hidden_solid_rays = 4;
+    config.fields.object_rays.below_support_rays = 2;
+    config.fields.object_rays.seen_free_rays = 2;
     // The members' solid prior (off under `paper` unless set), for every member with a cell no
     // member saw into: its cells are not checkpointed either.
-    config.category_fields.hidden_solid_rays = Some(4);
+    config.category_fields.hidden_solid_rays = 4;
     config.category_fields.min_hidden_share = 0.0;
     config
 }

@@ -17,9 +17,8 @@ fn config(policy: SchedulePolicy) -> MapperConfig {
             final_steps: 60,
             ..FieldConfig::default()
         },
-        ..MapperConfig::default()
+        ..MapperConfig::profile(policy)
     };
-    config.schedule.policy = policy;
     config.schedule.max_steps_after_stream = 60;
     config.categories.min_field_steps = 20;
     config.category_fields.iterations = 60;
