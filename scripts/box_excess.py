@@ -9,8 +9,7 @@ prediction, as runs with per-frame ids do). For each true object the paired pred
 extents (summary.json's `box_extents_m`) minus the true mesh's extents in its own frame, both
 sorted longest first, in centimetres; then the median and mean of each object's largest excess.
 A box grown past its object by a camera's flying pixels or fattened edges holds a layer of cells
-beside the object that the views see free (docs/ROBUSTNESS.md, "Tried, not kept: a walk that
-ends at one layer of free cells opens nothing"). Standard library only.
+beside the object that the views see free. Standard library only.
 """
 import json
 import statistics

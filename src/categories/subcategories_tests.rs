@@ -55,7 +55,7 @@ fn the_middle_band_asks_the_reverse_distance() {
     let rays = BTreeMap::from([(ObjectId(1), 10)]);
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     let paper = SubcategoryRule {
-        assignment: Some(SubcategoryAssignment::First),
+        assignment: SubcategoryAssignment::First,
         ..SubcategoryRule::default()
     };
     let groups = subcategorize(&ids, &rays, RepresentativeChoice::Uncertainty, &paper, &reg, &mut rng);
@@ -142,7 +142,7 @@ fn subcategorize_ranked(reg: &Table, rule: &SubcategoryRule) -> Vec<Subcategory>
 fn a_partial_representative_joins_the_group_of_its_design_that_explains_it_best() {
     let reg = partial_representative((0.05, 0.2));
     let first = SubcategoryRule {
-        assignment: Some(SubcategoryAssignment::First),
+        assignment: SubcategoryAssignment::First,
         ..SubcategoryRule::default()
     };
     assert_eq!(
@@ -193,7 +193,7 @@ fn a_member_the_first_representative_accepts_joins_the_one_that_explains_it_bett
     let rays = BTreeMap::from([(ObjectId(1), 900), (ObjectId(4), 800)]);
     let run = |assignment| {
         let rule = SubcategoryRule {
-            assignment: Some(assignment),
+            assignment: assignment,
             ..SubcategoryRule::default()
         };
         members_of(&subcategorize(

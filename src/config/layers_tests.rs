@@ -22,7 +22,10 @@ fn camera_and_segmenter() -> SensorChoice {
 
 #[test]
 fn no_layers_resolve_to_the_fast_profile_and_a_named_schedule_to_its_profile() {
-    assert_eq!(SettingsLayers::default().resolve().expect("valid"), MapperConfig::fast());
+    assert_eq!(
+        SettingsLayers::default().resolve().expect("valid"),
+        MapperConfig::fast()
+    );
     let paper_flag = SettingsLayers {
         flags: table("schedule.policy = \"paper\""),
         ..SettingsLayers::default()
@@ -63,7 +66,11 @@ fn the_file_keeps_what_it_sets_over_the_sensors_settings_and_the_flags_win_over_
     }
     .resolve()
     .expect("valid");
-    assert_eq!(probed, sensor.apply(MapperConfig::fast()), "the sensor over the profile");
+    assert_eq!(
+        probed,
+        sensor.apply(MapperConfig::fast()),
+        "the sensor over the profile"
+    );
     assert_eq!(probed.dataset.depth_noise_per_m2, 0.0025);
     assert_eq!(probed.objects.association.instances, InstanceSource::PerFrame);
     let layers = SettingsLayers {
@@ -72,9 +79,15 @@ fn the_file_keeps_what_it_sets_over_the_sensors_settings_and_the_flags_win_over_
         flags: table("seed = 9"),
     };
     let resolved = layers.resolve().expect("valid");
-    assert_eq!(resolved.dataset.depth_noise_per_m2, 0.001, "the file's, not the camera's");
+    assert_eq!(
+        resolved.dataset.depth_noise_per_m2, 0.001,
+        "the file's, not the camera's"
+    );
     assert_eq!(resolved.objects.mask_border_px, 0, "the file's, not the segmenter's");
-    assert_eq!(resolved.dataset.depth_smoothing, probed.dataset.depth_smoothing, "the camera's");
+    assert_eq!(
+        resolved.dataset.depth_smoothing, probed.dataset.depth_smoothing,
+        "the camera's"
+    );
     assert_eq!(resolved.seed, 9, "the flag's, not the file's");
 }
 
@@ -85,13 +98,19 @@ fn a_bad_value_in_any_layer_is_an_error_naming_the_key() {
         ..SettingsLayers::default()
     };
     let err = bad_policy.resolve().expect_err("no such schedule");
-    assert!(matches!(&err, CatmapError::Config(m) if m.contains("schedule.policy")), "{err}");
+    assert!(
+        matches!(&err, CatmapError::Config(m) if m.contains("schedule.policy")),
+        "{err}"
+    );
     let bad_stride = SettingsLayers {
         flags: table("stream.stride = 0"),
         ..SettingsLayers::default()
     };
     let err = bad_stride.resolve().expect_err("stride 0");
-    assert!(matches!(&err, CatmapError::Config(m) if m.contains("stream.stride")), "{err}");
+    assert!(
+        matches!(&err, CatmapError::Config(m) if m.contains("stream.stride")),
+        "{err}"
+    );
 }
 
 #[test]

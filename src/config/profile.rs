@@ -4,9 +4,9 @@
 //! settings, a config file and the command line's flags are laid over the profile
 //! ([`super::layers`]).
 
+use crate::categories::class_registration::AlignmentTemplate;
 use crate::categories::grown_box::RepresentativeBox;
 use crate::categories::nocs::MemberScale;
-use crate::categories::class_registration::AlignmentTemplate;
 use crate::categories::subcategories::SubcategoryAssignment;
 use crate::field::RaySamplerConfig;
 use crate::field::category::{CategoryRayBudget, ShapeCodes};

@@ -39,7 +39,11 @@ fn profile_rows() -> Vec<(String, toml::Value, toml::Value)> {
         .map(|row| {
             let cells: Vec<&str> = row.split('|').map(str::trim).collect();
             let unquote = |cell: &str| cell.trim_matches('`').to_owned();
-            (unquote(cells[1]), literal(&unquote(cells[2])), literal(&unquote(cells[3])))
+            (
+                unquote(cells[1]),
+                literal(&unquote(cells[2])),
+                literal(&unquote(cells[3])),
+            )
         })
         .collect()
 }
@@ -60,7 +64,10 @@ fn methods_profile_table_names_every_key_where_paper_and_fast_differ_with_both_v
     rows.sort_by(|a, b| a.0.cmp(&b.0));
     let mut differing = differing;
     differing.sort_by(|a, b| a.0.cmp(&b.0));
-    assert!(differing.len() >= 15, "the profiles differ in catmap's choices: {differing:?}");
+    assert!(
+        differing.len() >= 15,
+        "the profiles differ in catmap's choices: {differing:?}"
+    );
     assert_eq!(rows, differing, "METHOD.md §7 against the profiles");
 }
 
@@ -71,12 +78,22 @@ fn papers_constants_are_the_ones_methods_sections_state() {
     let rays = &fields.object_rays;
     // §2: vMAP's sampler, keyframes and optimiser.
     assert_eq!(
-        (rays.keyframes_per_step, rays.pixels_per_keyframe, rays.free_samples, rays.surface_samples),
+        (
+            rays.keyframes_per_step,
+            rays.pixels_per_keyframe,
+            rays.free_samples,
+            rays.surface_samples
+        ),
         (5, 24, 1, 9)
     );
     assert_eq!((rays.surface_band_m, rays.behind_occluder_m), (0.1, 0.05));
     assert_eq!(
-        (rays.box_free_samples, rays.hidden_solid_rays, rays.mirror_rays, rays.own_pixel_draws),
+        (
+            rays.box_free_samples,
+            rays.hidden_solid_rays,
+            rays.mirror_rays,
+            rays.own_pixel_draws
+        ),
         (0, 0, 0, 0),
         "no box samples, priors, mirrored rays or own-pixel draws"
     );
@@ -100,7 +117,10 @@ fn papers_constants_are_the_ones_methods_sections_state() {
     // §5: one field per subcategory, a shape code per member, the reference's ray budget.
     let c = &paper.category_fields;
     assert_eq!((c.code_dim, c.rays_per_object, c.iterations), (32, 120, 10_000));
-    assert_eq!((c.shape_codes, c.ray_budget), (ShapeCodes::PerMember, CategoryRayBudget::PerCategory));
+    assert_eq!(
+        (c.shape_codes, c.ray_budget),
+        (ShapeCodes::PerMember, CategoryRayBudget::PerCategory)
+    );
     assert_eq!(c.hidden_solid_rays, 0);
     // §6: meshes at occupancy 0.5.
     let m = &paper.meshes.object;

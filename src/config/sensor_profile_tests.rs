@@ -46,7 +46,11 @@ fn flags_win_and_the_probe_decides_the_rest() {
 fn a_choice_lays_the_sensors_settings_over_a_profile() {
     let base = MapperConfig::default();
     let exact = SensorChoice::resolve(None, None, None, Some(profile(0.0003, 0.03)));
-    assert_eq!(exact.apply(base.clone()), base, "exact depth and masks are the profile's");
+    assert_eq!(
+        exact.apply(base.clone()),
+        base,
+        "exact depth and masks are the profile's"
+    );
     let noisy = SensorChoice::resolve(None, None, None, Some(profile(0.006, 0.6)));
     let mut expected = base.clone();
     expected.objects = expected.objects.clone().with_mask_borders(MaskBorders::Segmenter);

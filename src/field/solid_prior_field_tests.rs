@@ -30,7 +30,10 @@ fn trained(free: FreeCells, below_support: usize) -> (OccupancyField, Point3<f32
     let mut rng = seeded_rng(2, RngStream::ObjectField(ObjectId(1)));
     let mut batch = FieldBatch::new(AdamWConfig::default());
     batch.push(OccupancyField::new(OBJECT_HIDDEN, 2.0, &mut rng));
-    let cfg = RaySamplerConfig { box_free_samples: 3, ..RaySamplerConfig::OBJECT };
+    let cfg = RaySamplerConfig {
+        box_free_samples: 3,
+        ..RaySamplerConfig::OBJECT
+    };
     let counts = PriorRays {
         hidden_solid: 8,
         below_support,

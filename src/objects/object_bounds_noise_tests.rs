@@ -36,7 +36,7 @@ fn reach_in_front(cloud: &ObservedCloud, box_smoothing_m: f32) -> f32 {
     let cfg = ObjectConfig {
         box_min_voxel_points: 3,
         box_smoothing_m,
-        box_fit: Some(BoxFit::Upright),
+        box_fit: BoxFit::Upright,
         ..ObjectConfig::default()
     };
     let fitted = fit_object_box(cloud, &cfg).expect("a box");

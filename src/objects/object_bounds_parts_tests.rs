@@ -40,7 +40,7 @@ fn add_panel(cloud: &mut ObservedCloud, x0: f32, votes: ViewVotes) {
 /// The fitted box's x range under `shape_voxels`, metres.
 fn x_range_under(cloud: &ObservedCloud, shape_voxels: ShapeVoxels) -> (f32, f32) {
     let cfg = ObjectConfig {
-        box_fit: Some(BoxFit::Upright),
+        box_fit: BoxFit::Upright,
         shape_voxels,
         ..ObjectConfig::default()
     };
@@ -117,7 +117,7 @@ fn a_sparsely_sampled_object_keeps_its_whole_shape() {
         }
     }
     let cfg = ObjectConfig {
-        box_fit: Some(BoxFit::Upright),
+        box_fit: BoxFit::Upright,
         box_min_voxel_points: 3,
         shape_voxels: ShapeVoxels::MostlyOwnMainParts,
         ..ObjectConfig::default()

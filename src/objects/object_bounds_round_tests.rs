@@ -18,7 +18,7 @@ fn lamp_seen_from_minus_x_cloud() -> ObservedCloud {
 fn a_round_object_seen_from_one_side_gets_a_second_plane_through_its_axis_unless_off() {
     let cloud = lamp_seen_from_minus_x_cloud();
     let cfg = ObjectConfig {
-        box_fit: Some(BoxFit::UprightOnFaces),
+        box_fit: BoxFit::UprightOnFaces,
         ..ObjectConfig::default()
     };
     let fit = |round_objects| {

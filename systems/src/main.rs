@@ -1,7 +1,6 @@
 //! The `catmap` command line: `run` maps a dataset (or a synthetic scene), `synth` writes a
 //! synthetic scene, `config` prints the default configuration (or a run's, resolved).
 
-
 use clap::{Parser, Subcommand};
 
 mod cli;

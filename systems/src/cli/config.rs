@@ -55,13 +55,83 @@ pub fn config(args: &ConfigArgs) -> anyhow::Result<String> {
             };
             let raw = plan.open_raw_source(&config)?;
             let instances = config.objects.association.instances;
-            let given = run.instances.is_some()
-                || instances == catmap::objects::instance_association::InstanceSource::PerFrame;
-            Some(sensor_choice(run.depth, run.masks, given.then_some(instances), raw.as_ref()))
+            let given =
+                run.instances.is_some() || instances == catmap::objects::instance_association::InstanceSource::PerFrame;
+            Some(sensor_choice(
+                run.depth,
+                run.masks,
+                given.then_some(instances),
+                raw.as_ref(),
+            ))
         }
-        None if flagged => Some(crate::cli::sensor_choice::flagged_choice(run.depth, run.masks, run.instances)),
+        None if flagged => Some(crate::cli::sensor_choice::flagged_choice(
+            run.depth,
+            run.masks,
+            run.instances,
+        )),
         None => None,
     };
     layers.sensor = sensor;
     Ok(resolved(&layers, run.format)?.to_toml())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: ConfigArgs,
+    }
+
+    fn printed(argv: &[&str]) -> anyhow::Result<catmap::MapperConfig> {
+        let cli = Cli::try_parse_from(std::iter::once("config").chain(argv.iter().copied()))?;
+        Ok(catmap::MapperConfig::from_toml(&config(&cli.args)?)?)
+    }
+
+    #[test]
+    fn the_resolved_paper_schedule_is_the_paper_profile_and_no_option_is_the_default() {
+        use catmap::MapperConfig;
+        assert_eq!(printed(&[]).expect("defaults"), MapperConfig::default());
+        assert_eq!(printed(&["--resolved"]).expect("resolved"), MapperConfig::fast());
+        assert_eq!(
+            printed(&["--resolved", "--schedule", "paper"]).expect("resolved"),
+            MapperConfig::paper(),
+            "METHOD.md §7's `paper` column (catmap::config's profile tests)"
+        );
+        let offline = printed(&["--resolved", "--offline", "--iterations", "300"]).expect("resolved");
+        assert_eq!(
+            offline,
+            MapperConfig {
+                fields: catmap::config::FieldConfig {
+                    offline: true,
+                    offline_iterations: 300,
+                    ..MapperConfig::paper().fields
+                },
+                ..MapperConfig::paper()
+            }
+        );
+    }
+
+    #[test]
+    fn a_sensor_flag_lays_its_settings_under_the_config_file() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("mine.toml");
+        std::fs::write(&path, "[dataset]\ndepth_noise_per_m2 = 0.001\n").expect("write");
+        let path = path.to_str().expect("a UTF-8 path");
+        let camera = printed(&["--resolved", "--depth", "camera"]).expect("resolved");
+        assert_eq!(camera.dataset.depth_noise_per_m2, 0.0025, "the camera's allowance");
+        let mine = printed(&["--resolved", "--depth", "camera", "--config", path]).expect("resolved");
+        assert_eq!(mine.dataset.depth_noise_per_m2, 0.001, "the file's, over the camera's");
+        assert_eq!(mine.dataset.depth_smoothing, camera.dataset.depth_smoothing);
+    }
+
+    #[test]
+    fn run_options_without_resolved_are_refused() {
+        let err = printed(&["--schedule", "paper"]).expect_err("needs --resolved");
+        assert!(err.to_string().contains("--resolved"), "{err}");
+    }
 }

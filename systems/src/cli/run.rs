@@ -340,17 +340,17 @@ pub fn resolved(layers: &SettingsLayers, format: DatasetFormat) -> anyhow::Resul
     Ok(config)
 }
 
-/// The settings of `args` without a sensor probe (exact depth and masks unless a config file
-/// or a flag says otherwise).
-fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
-    resolved(&layers_from_args(args)?, args.format)
-}
-
 #[cfg(test)]
 mod tests {
     use clap::Parser;
 
     use super::*;
+
+    /// The settings of `args` without a sensor probe (exact depth and masks unless a config
+    /// file or a flag says otherwise).
+    fn config_from_args(args: &RunArgs) -> anyhow::Result<catmap::MapperConfig> {
+        resolved(&layers_from_args(args)?, args.format)
+    }
 
     #[derive(Parser)]
     struct Cli {

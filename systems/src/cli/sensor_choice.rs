@@ -39,7 +39,11 @@ pub fn sensor_choice(
 
 /// The flags' depth, mask and id settings alone, exact and consistent where a flag is missing
 /// (`catmap config --resolved` without a dataset to probe).
-pub fn flagged_choice(depth: Option<DepthArg>, masks: Option<MasksArg>, instances: Option<InstancesArg>) -> SensorChoice {
+pub fn flagged_choice(
+    depth: Option<DepthArg>,
+    masks: Option<MasksArg>,
+    instances: Option<InstancesArg>,
+) -> SensorChoice {
     SensorChoice::resolve(
         depth.map(depth_images),
         masks.map(mask_borders),

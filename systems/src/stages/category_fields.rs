@@ -100,7 +100,11 @@ pub fn train_category_fields(
         .scheduler
         .plan_batch(&facts, config.training_policy(), &config.schedule.plateau);
     schedule.planned_categories = plan.indices.len();
-    let rays = fields.member_rays(objects.iter().count(), &config.category_fields, &config.fields.object_rays);
+    let rays = fields.member_rays(
+        objects.iter().count(),
+        &config.category_fields,
+        &config.fields.object_rays,
+    );
     let meshing = &config.meshes.object;
     let prior = MemberPrior {
         solid_rays: config.category_fields.hidden_solid_rays,
