@@ -24,6 +24,9 @@ pub mod registration;
 pub mod meshing;
 pub mod metrics;
 
+// Sweeps of runs (`catmap sweep`, `catmap report`).
+pub mod sweep;
+
 // Shared by every layer.
 pub mod checkpoint;
 pub mod config;

@@ -35,6 +35,12 @@ enum Command {
     Eval(cli::eval::EvalArgs),
     /// Compare two runs' metrics.json side by side (per class, repeated vs unique objects, all).
     Compare(cli::compare::CompareArgs),
+    /// Run a sweep spec's jobs here (--jobs N at a time), or write them out for GNU parallel,
+    /// Slurm or Kubernetes (--emit).
+    Sweep(cli::sweep::SweepArgs),
+    /// The Markdown tables of sweeps' runs (all, repeated and unique objects, per class; wall
+    /// clock, memory and build).
+    Report(cli::report::ReportArgs),
     /// Print the default configuration as TOML (a config file lists only what it changes), or
     /// with --resolved the settings `catmap run` with the same options maps with.
     Config(cli::config::ConfigArgs),
@@ -55,6 +61,11 @@ fn main() -> anyhow::Result<()> {
         Command::Synth(args) => cli::synth::synth(&args),
         Command::Eval(args) => cli::eval::eval(&args),
         Command::Compare(args) => cli::compare::compare(&args),
+        Command::Sweep(args) => cli::sweep::sweep(&args),
+        Command::Report(args) => {
+            print_stdout(&cli::report::report(&args)?);
+            Ok(())
+        }
         Command::Config(args) => {
             print_stdout(&cli::config::config(&args)?);
             Ok(())

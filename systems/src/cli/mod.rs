@@ -1,4 +1,4 @@
-//! The `catmap` binary's own modules: one per subcommand (`run`, `synth`, `eval`, `compare`, `config`), and
+//! The `catmap` binary's own modules: one per subcommand (`run`, `synth`, `eval`, `compare`, `config`, `sweep`, `report`), and
 //! what `run` is made of — the run plan (what was asked, saved in checkpoints), its phases with
 //! checkpoints (`run_phases`), the files it writes (`run_outputs`) and progress bars; and `--color`.
 
@@ -7,9 +7,11 @@ pub mod compare;
 pub mod config;
 pub mod eval;
 pub mod progress;
+pub mod report;
 pub mod run;
 pub mod run_outputs;
 pub mod run_phases;
 pub mod run_plan;
 pub mod sensor_choice;
+pub mod sweep;
 pub mod synth;

@@ -15,6 +15,9 @@
 //!   predictions fails and says what to try; `catmap [run options]` and `--version`.
 //! - Issue 34 (`own_data`): the README's "Your own data" walk-through, run as written: a
 //!   synthetic sequence in TUM RGB-D's layout with per-frame masks, mapped.
+//! - Issue 69 (`sweeps`): the quick sweep and its report reproduce docs/RESULTS.md's quick tables
+//!   byte for byte; the jobs emitted for GNU parallel, Slurm and Kubernetes parse, and parallel's
+//!   script runs a two-run sweep where GNU parallel is installed.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -187,3 +190,4 @@ mod kill_resume;
 mod live;
 mod newcomer;
 mod own_data;
+mod sweeps;
