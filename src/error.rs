@@ -40,9 +40,14 @@ pub enum CatmapError {
         /// What is wrong.
         reason: String,
     },
-    /// A configuration value is invalid.
+    /// A configuration's text is not a configuration: TOML that does not parse, an unknown key,
+    /// a value of the wrong type (the message names the key).
     #[error("invalid config: {0}")]
-    Config(String),
+    ConfigSyntax(String),
+    /// A configuration value (of a file, a flag or a spec) lies outside what it may be; the
+    /// message names the key and what it must be.
+    #[error("invalid config: {0}")]
+    ConfigValue(String),
     /// A checkpoint is missing, torn or does not match this build.
     #[error("{path}: unusable checkpoint: {reason}")]
     Checkpoint {

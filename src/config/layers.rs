@@ -36,7 +36,7 @@ impl SettingsLayers {
         match named {
             Some(value) => {
                 let policy = SchedulePolicy::deserialize(value.clone())
-                    .map_err(|e| CatmapError::Config(format!("schedule.policy: {e}")))?;
+                    .map_err(|e| CatmapError::ConfigValue(format!("schedule.policy: {e}")))?;
                 Ok(if offline { SchedulePolicy::Paper } else { policy })
             }
             None if offline => Ok(SchedulePolicy::Paper),
@@ -56,7 +56,7 @@ impl SettingsLayers {
         merge(&mut tree, &self.flags);
         let config: MapperConfig = tree
             .try_into()
-            .map_err(|e: toml::de::Error| CatmapError::Config(e.message().trim().to_owned()))?;
+            .map_err(|e: toml::de::Error| CatmapError::ConfigSyntax(e.message().trim().to_owned()))?;
         config.validate()?;
         Ok(config)
     }

@@ -99,7 +99,7 @@ fn a_bad_value_in_any_layer_is_an_error_naming_the_key() {
     };
     let err = bad_policy.resolve().expect_err("no such schedule");
     assert!(
-        matches!(&err, CatmapError::Config(m) if m.contains("schedule.policy")),
+        matches!(&err, CatmapError::ConfigValue(m) if m.contains("schedule.policy")),
         "{err}"
     );
     let bad_stride = SettingsLayers {
@@ -108,8 +108,17 @@ fn a_bad_value_in_any_layer_is_an_error_naming_the_key() {
     };
     let err = bad_stride.resolve().expect_err("stride 0");
     assert!(
-        matches!(&err, CatmapError::Config(m) if m.contains("stream.stride")),
+        matches!(&err, CatmapError::ConfigValue(m) if m.contains("stream.stride")),
         "{err}"
+    );
+    let unknown = SettingsLayers {
+        file: table("[stream]\nstrides = 2"),
+        ..SettingsLayers::default()
+    };
+    let err = unknown.resolve().expect_err("no such key");
+    assert!(
+        matches!(&err, CatmapError::ConfigSyntax(m) if m.contains("strides")),
+        "an unknown key is a syntax error naming it: {err}"
     );
 }
 

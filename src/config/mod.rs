@@ -71,7 +71,7 @@ impl MapperConfig {
 
     /// Parses a TOML file's text; unknown keys and wrong types are errors.
     pub fn from_toml(text: &str) -> Result<Self> {
-        let config: Self = toml::from_str(text).map_err(|e| CatmapError::Config(e.to_string()))?;
+        let config: Self = toml::from_str(text).map_err(|e| CatmapError::ConfigSyntax(e.to_string()))?;
         config.validate()?;
         Ok(config)
     }
@@ -142,9 +142,9 @@ impl MapperConfig {
 
     /// Checks values that serde cannot.
     pub fn validate(&self) -> Result<()> {
-        let bad = |msg: &str| Err(CatmapError::Config(msg.to_owned()));
+        let bad = |msg: &str| Err(CatmapError::ConfigValue(msg.to_owned()));
         if !(1..=MAX_CHANNEL_CAPACITY).contains(&self.stream.channel_capacity) {
-            return Err(CatmapError::Config(format!(
+            return Err(CatmapError::ConfigValue(format!(
                 "stream.channel_capacity must be between 1 and {MAX_CHANNEL_CAPACITY} frames (the channel reserves a slot per frame)"
             )));
         }
@@ -188,12 +188,12 @@ impl MapperConfig {
         }
         for (name, rays) in [("object_rays", &f.object_rays), ("background_rays", &f.background_rays)] {
             if rays.keyframes_per_step == 0 || rays.pixels_per_keyframe == 0 || rays.samples_per_ray() == 0 {
-                return Err(CatmapError::Config(format!(
+                return Err(CatmapError::ConfigValue(format!(
                     "fields.{name}: keyframes, pixels and samples must be at least 1"
                 )));
             }
             if !(rays.surface_band_m > 0.0 && rays.behind_occluder_m >= 0.0) {
-                return Err(CatmapError::Config(format!(
+                return Err(CatmapError::ConfigValue(format!(
                     "fields.{name}: surface_band_m must be positive"
                 )));
             }

@@ -55,7 +55,7 @@ pub fn intrinsics_problem(intrinsics: &CameraIntrinsics) -> Option<String> {
 
 /// Parses a CLI camera spec `W,H,FX,FY,CX,CY` (e.g. `1200,680,600,600,599.5,339.5`).
 pub fn parse_camera_spec(spec: &str) -> Result<CameraIntrinsics> {
-    let bad = |reason: String| CatmapError::Config(format!("--camera {spec:?}: {reason}"));
+    let bad = |reason: String| CatmapError::ConfigValue(format!("--camera {spec:?}: {reason}"));
     let parts: Vec<&str> = spec.split(',').map(str::trim).collect();
     let [w, h, fx, fy, cx, cy] = parts[..] else {
         return Err(bad(format!(

@@ -246,12 +246,12 @@ pub fn require_size<T: Copy>(image: &Image<T>, expected: (u32, u32), path: &Path
 /// Checks depth-conversion options: a positive finite scale and a positive maximum depth.
 pub fn check_depth_options(depth_scale: f32, max_depth_m: f32) -> Result<()> {
     if !depth_scale.is_finite() || depth_scale <= 0.0 {
-        return Err(CatmapError::Config(format!(
+        return Err(CatmapError::ConfigValue(format!(
             "depth_scale must be positive and finite, got {depth_scale}"
         )));
     }
     if max_depth_m.is_nan() || max_depth_m <= 0.0 {
-        return Err(CatmapError::Config(format!(
+        return Err(CatmapError::ConfigValue(format!(
             "max_depth_m must be positive, got {max_depth_m}"
         )));
     }

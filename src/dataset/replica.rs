@@ -160,7 +160,7 @@ impl ReplicaSequence {
         }
         check_depth_options(options.depth_scale, options.max_depth_m)?;
         if let Some(problem) = options.camera.as_ref().and_then(intrinsics_problem) {
-            return Err(CatmapError::Config(format!("camera: {problem}")));
+            return Err(CatmapError::ConfigValue(format!("camera: {problem}")));
         }
         let depth_dir = dir.join("depth");
         if !depth_dir.is_dir() {

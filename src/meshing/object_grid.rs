@@ -138,19 +138,19 @@ impl ObjectGrid {
             ));
         }
         if !(config.voxel_size_m.is_finite() && config.voxel_size_m > 0.0) {
-            return Err(CatmapError::Config(format!(
+            return Err(CatmapError::ConfigValue(format!(
                 "voxel_size_m = {} must be positive",
                 config.voxel_size_m
             )));
         }
         if config.max_samples_per_side < 2 {
-            return Err(CatmapError::Config(format!(
+            return Err(CatmapError::ConfigValue(format!(
                 "max_samples_per_side = {} must be >= 2",
                 config.max_samples_per_side
             )));
         }
         if !(config.box_fill > 0.0 && config.box_fill <= 1.0) {
-            return Err(CatmapError::Config(format!(
+            return Err(CatmapError::ConfigValue(format!(
                 "box_fill = {} must be in (0, 1]",
                 config.box_fill
             )));

@@ -30,9 +30,11 @@ pub fn check_cloud(points: &[Point3<f32>], what: &str, min_points: usize) -> Res
 /// empty or non-finite cloud, or a voxel edge that is not positive and finite.
 pub fn voxel_centroids(points: &[Point3<f32>], voxel_m: f32) -> Result<Vec<Point3<f32>>> {
     if !(voxel_m > 0.0 && voxel_m.is_finite()) {
-        return Err(CatmapError::Config(format!(
-            "voxel edge must be positive, got {voxel_m}"
-        )));
+        return Err(CatmapError::bad_value(
+            "the voxel edge",
+            voxel_m,
+            "be positive and finite",
+        ));
     }
     check_cloud(points, "input", 1)?;
     Ok(voxel_downsample(points, voxel_m))

@@ -175,7 +175,7 @@ impl SweepSpec {
 
     /// The jobs, scene by scene, then by noise, mode, schedule and seed.
     pub fn jobs(&self) -> Result<Vec<SweepJob>> {
-        let bad = |msg: String| Err(CatmapError::Config(msg));
+        let bad = |msg: String| Err(CatmapError::ConfigValue(msg));
         if self.name.is_empty()
             || !self
                 .name

@@ -148,7 +148,7 @@ impl FromStr for Preset {
         Self::ALL
             .into_iter()
             .find(|p| p.name() == s)
-            .ok_or_else(|| CatmapError::Config(format!("unknown synthetic preset {s:?} (small, default, living)")))
+            .ok_or_else(|| CatmapError::ConfigValue(format!("unknown synthetic preset {s:?} (small, default, living)")))
     }
 }
 

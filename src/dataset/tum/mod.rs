@@ -128,14 +128,14 @@ impl TumSequence {
         }
         check_depth_options(options.depth_scale.unwrap_or(TUM_DEPTH_SCALE), options.max_depth_m)?;
         if let Some(problem) = options.camera.as_ref().and_then(intrinsics_problem) {
-            return Err(CatmapError::Config(format!("camera: {problem}")));
+            return Err(CatmapError::ConfigValue(format!("camera: {problem}")));
         }
         if !(options.max_time_difference_s >= 0.0 && options.max_time_difference_s.is_finite()) {
             let reason = format!(
                 "the largest time difference must be finite and not negative, got {}",
                 options.max_time_difference_s
             );
-            return Err(CatmapError::Config(reason));
+            return Err(CatmapError::ConfigValue(reason));
         }
         for list in ["rgb.txt", "depth.txt", "groundtruth.txt"] {
             if !dir.join(list).exists() {

@@ -50,9 +50,11 @@ impl MlpBatch {
     /// `count` MLPs with layer widths `dims`, initialised from `rng` (see [`ParamLayout::init`]).
     pub fn new(dims: &[usize], count: usize, optim: AdamWConfig, rng: &mut impl Rng) -> Result<Self> {
         if dims.len() < 2 || dims.contains(&0) {
-            return Err(CatmapError::Config(format!(
-                "MLP widths {dims:?}: need at least two non-zero widths"
-            )));
+            return Err(CatmapError::bad_value(
+                "the MLP's layer widths",
+                dims,
+                "hold at least two widths, none of them 0",
+            ));
         }
         let layout = ParamLayout::mlp(dims);
         let mut plan = PackingPlan::default();

@@ -179,9 +179,20 @@ fn run_job(spec: &SweepSpec, spec_path: &Path, out: &Path, job: &SweepJob) -> an
         // Written aside and renamed, so that two jobs of one scene never read half of it.
         let aside = out.join("scenes").join(format!(".{}.{}", job.scene_name(), job.index));
         let _ = std::fs::remove_dir_all(&aside);
-        let synth = SynthCli::try_parse_from(std::iter::once("synth".to_owned()).chain(job.synth_args(&aside)))
-            .with_context(|| format!("job {}: scene {} with noise {}", job.name(), job.scene(), job.noise))?;
-        crate::cli::synth::synth(&synth.args)?;
+        // A process of its own, so that the run's peak memory is the run's.
+        let exe = std::env::current_exe().context("cannot find the catmap binary")?;
+        let status = std::process::Command::new(exe)
+            .arg("synth")
+            .args(job.synth_args(&aside))
+            .status()
+            .context("cannot start catmap synth")?;
+        anyhow::ensure!(
+            status.success(),
+            "job {}: catmap synth of scene {} with noise {} failed",
+            job.name(),
+            job.scene(),
+            job.noise
+        );
         if std::fs::rename(&aside, &scene).is_err() {
             anyhow::ensure!(scene.join("scene.json").is_file(), "cannot write {}", scene.display());
             let _ = std::fs::remove_dir_all(&aside);
@@ -196,13 +207,6 @@ fn run_job(spec: &SweepSpec, spec_path: &Path, out: &Path, job: &SweepJob) -> an
         RunCli::try_parse_from(std::iter::once("run".to_owned()).chain(job.run_args(spec, spec_dir, &scene, &run_out)))
             .with_context(|| format!("job {}: the spec's run arguments", job.name()))?;
     crate::cli::run::run(&run.args)
-}
-
-/// `catmap synth`'s arguments, parsed.
-#[derive(clap::Parser)]
-struct SynthCli {
-    #[command(flatten)]
-    args: crate::cli::synth::SynthArgs,
 }
 
 /// `catmap run`'s arguments, parsed.

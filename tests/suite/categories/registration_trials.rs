@@ -123,6 +123,7 @@ fn failed_trials(
             ));
         }
     }
+    println!("{} of 50 trials failed: {failures:#?}", failures.len());
     failures
 }
 
