@@ -133,7 +133,14 @@ fn the_default_scene_splits_the_chair_designs_and_aligns_every_box() {
                     object.design,
                     centre_m * 100.0
                 ));
-                if centre_m >= 0.05 || rotation_deg >= 10.0 {
+                // Measured: the stool 3.4° / 0.6 cm and the lamp's tilt 2.6° / 3.7 cm (small,
+                // round, thin); every other box within 1.0° / 1.2 cm. Bounds: those plus about
+                // 0.5° / 0.5–0.8 cm.
+                let (max_deg, max_m) = match object.design {
+                    Design::Stool | Design::FloorLamp => (4.0, 0.045),
+                    _ => (1.5, 0.015),
+                };
+                if centre_m >= max_m || rotation_deg >= max_deg {
                     failures.push(m.id);
                 }
             }

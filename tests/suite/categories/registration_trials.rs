@@ -1,7 +1,9 @@
 //! Registration of partial, noisy, outlier-laden views of the synthetic designs to their full
-//! surface (the category-registration issue's acceptance): in ≥ 95 % of 50 seeded trials the
-//! rotation error is < 5° and the centre's translation error < 3 cm, or — for symmetric
-//! designs — the aligned clean surface lies within 1 cm (mean) of the true surface.
+//! surface: a trial passes when the rotation error is < 5° and the centre's translation error
+//! < 3 cm, or — for symmetric designs — the aligned clean surface lies within 1 cm (mean) of the
+//! true surface. The trials are deterministic, so each test names the trials that fail: the
+//! free search passes 48 of 50, the search about up 49, the free search with its tilt removed
+//! all 50 upright trials.
 
 use catmap::registration::{RegistrationConfig, Rotations, Tilt, refine_registration, register_to_representative};
 use catmap::synth::{Design, RegistrationTrial, RegistrationTrialSpec};
@@ -10,8 +12,7 @@ use rand_chacha::ChaCha8Rng;
 
 /// The designs of the category-registration issue's acceptance. The sofa, the bed and the
 /// bookcase (issue 33's scenes) stand alone in their class in every preset, so no member is
-/// registered to them; the bed, a large box seen from one side, fails 4 of 5 such trials
-/// (session 25).
+/// registered to them; the bed, a large box seen from one side, fails 4 of 5 such trials.
 const TRIAL_DESIGNS: [Design; 8] = [
     Design::LadderBackChair,
     Design::Armchair,
@@ -30,7 +31,9 @@ fn fifty_seeded_trials_register_within_five_degrees_and_three_centimetres() {
         &RegistrationConfig::default(),
         |_, _| {},
     );
-    assert!(failures.len() <= 2, "more than 5 % of the trials failed: {failures:#?}");
+    // Measured: a ladder-back chair 7.5° / 3.2 cm off, a stool 90.6° off (its aligned clouds
+    // 1.65 and 1.45 cm apart).
+    assert_eq!(seeds_of(&failures), [0, 38], "the failing trials: {failures:#?}");
 }
 
 #[test]
@@ -50,7 +53,8 @@ fn upright_trials_register_upright_within_five_degrees_and_three_centimetres() {
         let up = estimate.rotation * nalgebra::Vector3::z();
         assert!((up.z - 1.0).abs() < 1e-5, "seed {seed}: the estimate tilts ({up:?})");
     });
-    assert!(failures.len() <= 2, "more than 5 % of the trials failed: {failures:#?}");
+    // Measured: the dining table half a turn off (180°, its aligned cloud 1.31 cm apart).
+    assert_eq!(seeds_of(&failures), [42], "the failing trials: {failures:#?}");
 }
 
 #[test]
@@ -79,7 +83,7 @@ fn a_free_search_with_its_tilt_removed_registers_upright_trials_upright() {
             tilt_deg(estimate)
         );
     });
-    assert!(failures.len() <= 2, "more than 5 % of the trials failed: {failures:#?}");
+    assert!(failures.is_empty(), "every trial passes: {failures:#?}");
     let kept = RegistrationConfig {
         tilt: Tilt::Kept,
         ..RegistrationConfig::default()
@@ -88,6 +92,14 @@ fn a_free_search_with_its_tilt_removed_registers_upright_trials_upright() {
         most_tilt.set(most_tilt.get().max(tilt_deg(estimate)))
     });
     assert!(most_tilt.get() >= 1.0, "kept, the largest tilt is {}°", most_tilt.get());
+}
+
+/// The seeds of `failures` (each "seed N …").
+fn seeds_of(failures: &[String]) -> Vec<u64> {
+    failures
+        .iter()
+        .filter_map(|f| f.strip_prefix("seed ")?.split(' ').next()?.parse().ok())
+        .collect()
 }
 
 /// The 50 seeded trials of `spec` (the designs in turn) registered with `cfg`, each estimate
