@@ -76,15 +76,6 @@ MUTATIONS = [
         "the failing trials",
     ),
     (
-        2,
-        "registration keeps the coarse search's poses, unrefined (the default scene's boxes)",
-        "src/registration/register.rs",
-        None,
-        None,
-        ["--test", "suite", "category_registration"],
-        "boxes off",
-    ),
-    (
         1,
         "the training report gives the category phase's end for the phase after the stream",
         "systems/src/training_report.rs",

@@ -193,7 +193,7 @@ fn a_member_the_first_representative_accepts_joins_the_one_that_explains_it_bett
     let rays = BTreeMap::from([(ObjectId(1), 900), (ObjectId(4), 800)]);
     let run = |assignment| {
         let rule = SubcategoryRule {
-            assignment: assignment,
+            assignment,
             ..SubcategoryRule::default()
         };
         members_of(&subcategorize(

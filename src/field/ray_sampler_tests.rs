@@ -126,7 +126,7 @@ fn box_samples_carve_the_part_of_each_ray_inside_the_box_before_the_surface() {
     };
     let draw = |box_free_samples| {
         let cfg = RaySamplerConfig {
-            box_free_samples: box_free_samples,
+            box_free_samples,
             ..RaySamplerConfig::OBJECT
         };
         let mut rng = ChaCha8Rng::seed_from_u64(5);
@@ -359,7 +359,7 @@ fn own_pixel_draws_put_rays_on_a_thin_object_that_the_box_draws_rarely_hit() {
     let share = |own_pixel_draws: usize| {
         let cfg = RaySamplerConfig {
             keyframes_per_step: 1,
-            own_pixel_draws: own_pixel_draws,
+            own_pixel_draws,
             ..RaySamplerConfig::OBJECT
         };
         let (mut own, mut all) = (0, 0);

@@ -106,6 +106,7 @@ fn seeds_of(failures: &[String]) -> Vec<u64> {
 /// shown to `check`: the trials whose rotation is 5° or more off or whose centre is 3 cm or
 /// more off, unless the aligned clean surface lies within 1 cm of the template (a symmetric
 /// design).
+#[allow(clippy::print_stdout, reason = "the measured failures, shown with --nocapture")]
 fn failed_trials(
     spec: &RegistrationTrialSpec,
     cfg: &RegistrationConfig,
