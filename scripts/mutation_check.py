@@ -8,6 +8,7 @@ the files are restored whatever happens:
 
     python3 scripts/mutation_check.py            # every mutation
     python3 scripts/mutation_check.py --list     # what each breaks, and its test
+    python3 scripts/mutation_check.py --only registration   # those whose description holds it
 
 Standard library only. Run from the repository's root on a clean work tree; it builds the test
 profile (CARGO_INCREMENTAL=0), so it takes a few minutes.
@@ -76,6 +77,15 @@ MUTATIONS = [
         "the failing trials",
     ),
     (
+        2,
+        "an aligned member's box turned 2.9° about up",
+        "src/categories/nocs.rs",
+        "let world_from_box = template_from_object.inverse() * rep_box;",
+        "let world_from_box = template_from_object.inverse() * rep_box * Isometry3::rotation(Vector3::z() * 0.05);",
+        ["--test", "suite", "category_registration"],
+        "boxes off",
+    ),
+    (
         1,
         "the training report gives the category phase's end for the phase after the stream",
         "systems/src/training_report.rs",
@@ -95,7 +105,11 @@ def cargo_test(args):
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--list", action="store_true", help="list the mutations and their tests")
+    parser.add_argument("--only", metavar="TEXT", help="only the mutations whose description holds TEXT")
     opts = parser.parse_args()
+    global MUTATIONS
+    if opts.only:
+        MUTATIONS = [m for m in MUTATIONS if opts.only in m[1]]
     if opts.list:
         for round_, what, path, _, _, test, _ in MUTATIONS:
             print(f"round {round_}: {what}\n    {path}\n    cargo test {' '.join(test)}")

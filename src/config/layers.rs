@@ -93,6 +93,26 @@ pub fn lookup<'t>(table: &'t toml::Table, key: &str) -> Option<&'t toml::Value> 
     None
 }
 
+/// Every leaf of `table` (values that are not tables) as (dotted key, value), in key order.
+pub fn leaves(table: &toml::Table) -> Vec<(String, toml::Value)> {
+    fn walk(table: &toml::Table, prefix: &str, out: &mut Vec<(String, toml::Value)>) {
+        for (key, value) in table {
+            let path = if prefix.is_empty() {
+                key.clone()
+            } else {
+                format!("{prefix}.{key}")
+            };
+            match value {
+                toml::Value::Table(inner) => walk(inner, &path, out),
+                _ => out.push((path, value.clone())),
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(table, "", &mut out);
+    out
+}
+
 /// `over` laid over `base`: tables merge key by key, every other value replaces the base's.
 fn merge(base: &mut toml::Table, over: &toml::Table) {
     for (key, value) in over {

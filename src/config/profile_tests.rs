@@ -6,21 +6,6 @@ use super::*;
 /// docs/METHOD.md, the method section by section.
 const METHOD_PAGE: &str = include_str!("../../docs/METHOD.md");
 
-/// Every leaf of `table` as (dotted key, value).
-fn leaves(table: &toml::Table, prefix: &str, out: &mut Vec<(String, toml::Value)>) {
-    for (key, value) in table {
-        let path = if prefix.is_empty() {
-            key.clone()
-        } else {
-            format!("{prefix}.{key}")
-        };
-        match value {
-            toml::Value::Table(inner) => leaves(inner, &path, out),
-            _ => out.push((path, value.clone())),
-        }
-    }
-}
-
 /// A TOML literal of the page (`0.5`, `"per_member"`) as a value.
 fn literal(text: &str) -> toml::Value {
     let table: toml::Table = toml::from_str(&format!("v = {text}")).expect("a TOML literal");
@@ -50,9 +35,8 @@ fn profile_rows() -> Vec<(String, toml::Value, toml::Value)> {
 
 #[test]
 fn methods_profile_table_names_every_key_where_paper_and_fast_differ_with_both_values() {
-    let (mut paper, mut fast) = (Vec::new(), Vec::new());
-    leaves(&MapperConfig::paper().to_table(), "", &mut paper);
-    leaves(&MapperConfig::fast().to_table(), "", &mut fast);
+    let paper = crate::config::layers::leaves(&MapperConfig::paper().to_table());
+    let fast = crate::config::layers::leaves(&MapperConfig::fast().to_table());
     assert_eq!(paper.len(), fast.len(), "one tree");
     let differing: Vec<(String, toml::Value, toml::Value)> = paper
         .into_iter()

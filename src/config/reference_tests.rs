@@ -3,21 +3,6 @@
 
 use super::*;
 
-/// Every key `catmap config` prints, as a dotted path.
-fn printed_keys(table: &toml::Table, prefix: &str, keys: &mut Vec<String>) {
-    for (key, value) in table {
-        let path = if prefix.is_empty() {
-            key.clone()
-        } else {
-            format!("{prefix}.{key}")
-        };
-        match value {
-            toml::Value::Table(inner) => printed_keys(inner, &path, keys),
-            _ => keys.push(path),
-        }
-    }
-}
-
 /// docs/CONFIG.md, the configuration's reference.
 const CONFIG_PAGE: &str = include_str!("../../docs/CONFIG.md");
 
@@ -41,8 +26,7 @@ fn keys_with_a_row() -> Vec<String> {
 #[test]
 fn every_key_catmap_config_prints_is_explained_in_docs_config_md_and_every_row_names_a_key() {
     let table: toml::Table = toml::from_str(&MapperConfig::default().to_toml()).expect("printed TOML parses");
-    let mut keys = Vec::new();
-    printed_keys(&table, "", &mut keys);
+    let keys: Vec<String> = super::layers::leaves(&table).into_iter().map(|(key, _)| key).collect();
     assert!(keys.len() > 100, "the whole tree: {}", keys.len());
     let unexplained: Vec<&String> = keys
         .iter()

@@ -140,6 +140,33 @@ impl EvaluationReport {
     }
 }
 
+/// A report of reconstructed objects `(id, class name, completion in cm)`, every other score
+/// fixed (accuracy 2 cm, C.R. 90 % / 30 %): the tests' fixture.
+#[cfg(test)]
+pub(crate) fn report_of_completions(completions: &[(u32, &str, f32)]) -> EvaluationReport {
+    let objects = completions
+        .iter()
+        .map(|&(id, class, completion)| ObjectMetrics {
+            id: ObjectId(id),
+            class: None,
+            class_name: class.to_owned(),
+            observed_surface_fraction: None,
+            prediction: None,
+            purity_pct: None,
+            scores: ObjectScores {
+                status: PredictionStatus::Reconstructed,
+                accuracy_cm: Some(2.0),
+                completion_cm: Some(completion),
+                completion_ratio_5cm_pct: 90.0,
+                completion_ratio_1cm_pct: 30.0,
+                accuracy_samples: 100,
+                accuracy_far_5cm_pct: Some(1.0),
+            },
+        })
+        .collect();
+    EvaluationReport::new(EvalSettings::default(), objects)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

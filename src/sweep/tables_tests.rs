@@ -1,30 +1,5 @@
 use super::*;
-use crate::ids::ObjectId;
-use crate::metrics::{EvalSettings, ObjectMetrics, ObjectScores, PredictionStatus};
-
-fn report(completions: &[(u32, &str, f32)]) -> EvaluationReport {
-    let objects = completions
-        .iter()
-        .map(|&(id, class, completion)| ObjectMetrics {
-            id: ObjectId(id),
-            class: None,
-            class_name: class.to_owned(),
-            observed_surface_fraction: None,
-            prediction: None,
-            purity_pct: None,
-            scores: ObjectScores {
-                status: PredictionStatus::Reconstructed,
-                accuracy_cm: Some(2.0),
-                completion_cm: Some(completion),
-                completion_ratio_5cm_pct: 90.0,
-                completion_ratio_1cm_pct: 30.0,
-                accuracy_samples: 100,
-                accuracy_far_5cm_pct: Some(1.0),
-            },
-        })
-        .collect();
-    EvaluationReport::new(EvalSettings::default(), objects)
-}
+use crate::metrics::report::report_of_completions as report;
 
 fn job(mode: &str) -> SweepJob {
     SweepJob {

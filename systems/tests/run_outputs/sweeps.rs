@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::catmap;
+use super::{CONFIG, catmap};
 
 /// The repository's root.
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
@@ -70,29 +70,6 @@ name = "two"
 scenes = ["small:4"]
 modes = ["category", "instance"]
 config = "config.toml"
-run_args = ["--max-frames", "5"]
-"#;
-
-const CONFIG: &str = r#"
-[fields]
-steps_per_frame = 2
-final_steps = 20
-
-[schedule]
-max_steps_after_stream = 40
-
-[categories]
-min_field_steps = 4
-
-[categories.uncertainty]
-angles = 30
-
-[meshes]
-background_voxel_m = 0.15
-
-[meshes.object]
-voxel_size_m = 0.04
-max_samples_per_side = 48
 "#;
 
 #[test]
