@@ -87,6 +87,15 @@ MUTATIONS = [
     ),
     (
         1,
+        "a mask joins an object only when it overlaps it twice as much",
+        "src/objects/association_config.rs",
+        "            min_overlap: 0.3,",
+        "            min_overlap: 0.6,",
+        ["-p", "catmap", "--lib", "per_frame_ids_of_a_small_scene"],
+        "panicked",
+    ),
+    (
+        1,
         "the training report gives the category phase's end for the phase after the stream",
         "systems/src/training_report.rs",
         "after_stream_end: phases.after_stream_end,",
