@@ -6,7 +6,7 @@
 
 use std::fmt::Write as _;
 
-use super::report::{EvaluationReport, MetricSummary, ObjectMetrics};
+use super::report::{EvaluationReport, MetricSummary, ObjectGroup, ObjectMetrics};
 use crate::error::{CatmapError, Result};
 
 /// The groups compared: (label, summary in A, summary in B).
@@ -18,8 +18,6 @@ pub fn compare_groups(a: &EvaluationReport, b: &EvaluationReport) -> Result<Comp
     if ids(a) != ids(b) {
         return Err(CatmapError::DifferentScenes);
     }
-    let repeated =
-        |r: &EvaluationReport, o: &ObjectMetrics| r.classes.get(&o.class_name).is_some_and(|c| c.objects > 1);
     let group = |r: &EvaluationReport, keep: &dyn Fn(&ObjectMetrics) -> bool| {
         MetricSummary::of(r.objects.iter().filter(|o| keep(o)))
     };
@@ -28,17 +26,13 @@ pub fn compare_groups(a: &EvaluationReport, b: &EvaluationReport) -> Result<Comp
         let in_class = |o: &ObjectMetrics| &o.class_name == name;
         groups.push((name.clone(), group(a, &in_class), group(b, &in_class)));
     }
-    groups.push((
-        "**repeated**".into(),
-        group(a, &|o| repeated(a, o)),
-        group(b, &|o| repeated(b, o)),
-    ));
-    groups.push((
-        "**unique**".into(),
-        group(a, &|o| !repeated(a, o)),
-        group(b, &|o| !repeated(b, o)),
-    ));
-    groups.push(("**all**".into(), a.mean, b.mean));
+    for (label, kind) in [
+        ("**repeated**", ObjectGroup::Repeated),
+        ("**unique**", ObjectGroup::Unique),
+        ("**all**", ObjectGroup::All),
+    ] {
+        groups.push((label.into(), a.group_summary(kind), b.group_summary(kind)));
+    }
     Ok(groups)
 }
 

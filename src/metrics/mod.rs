@@ -30,4 +30,4 @@ pub use ground_truth::{
 };
 pub use markdown::render_markdown;
 pub use object_scores::{ObjectScores, PredictionStatus, SAMPLES_PER_MESH, score_object};
-pub use report::{EvalSettings, EvaluationReport, MetricSummary, ObjectMetrics};
+pub use report::{EvalSettings, EvaluationReport, MetricSummary, ObjectGroup, ObjectMetrics};

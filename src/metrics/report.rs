@@ -117,7 +117,28 @@ pub struct EvaluationReport {
     pub extra_predictions: Vec<ObjectId>,
 }
 
+/// A group of an evaluation's objects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ObjectGroup {
+    /// Every object.
+    All,
+    /// Objects whose class has more than one object (those that can share a category field).
+    Repeated,
+    /// Objects alone in their class.
+    Unique,
+}
+
 impl EvaluationReport {
+    /// The summary over `group`'s objects.
+    pub fn group_summary(&self, group: ObjectGroup) -> MetricSummary {
+        let repeated = |o: &&ObjectMetrics| self.classes.get(&o.class_name).is_some_and(|c| c.objects > 1);
+        match group {
+            ObjectGroup::All => self.mean,
+            ObjectGroup::Repeated => MetricSummary::of(self.objects.iter().filter(repeated)),
+            ObjectGroup::Unique => MetricSummary::of(self.objects.iter().filter(|o| !repeated(o))),
+        }
+    }
+
     /// Sorts `objects` by id and aggregates them per class and overall.
     pub fn new(settings: EvalSettings, mut objects: Vec<ObjectMetrics>) -> Self {
         objects.sort_by_key(|o| o.id);

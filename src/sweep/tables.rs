@@ -3,11 +3,11 @@
 //! field) and the unique ones, per class, and each run's wall clock, peak memory and build. The
 //! metric tables are the same on every machine; the time table is the machine's.
 
-use std::collections::BTreeMap;
+use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
 use super::spec::SweepJob;
-use crate::metrics::{EvaluationReport, MetricSummary};
+use crate::metrics::{EvaluationReport, MetricSummary, ObjectGroup};
 
 /// What one run of a sweep left.
 #[derive(Debug, Clone, PartialEq)]
@@ -42,21 +42,16 @@ pub enum Tables {
     MetricsAndTime,
 }
 
-/// The object groups of the summary tables.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Group {
-    All,
-    Repeated,
-    Unique,
-}
-
 /// The report of one sweep's runs, in job order.
 pub fn render(name: &str, runs: &[SweepRun], tables: Tables) -> String {
     let mut out = String::new();
     for (group, title) in [
-        (Group::All, "all objects"),
-        (Group::Repeated, "repeated objects (classes with more than one object)"),
-        (Group::Unique, "unique objects"),
+        (ObjectGroup::All, "all objects"),
+        (
+            ObjectGroup::Repeated,
+            "repeated objects (classes with more than one object)",
+        ),
+        (ObjectGroup::Unique, "unique objects"),
     ] {
         let _ = writeln!(out, "#### {name}: {title}\n");
         out.push_str(
@@ -64,7 +59,7 @@ pub fn render(name: &str, runs: &[SweepRun], tables: Tables) -> String {
         );
         out.push_str("|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
         for run in runs {
-            let summary = run.metrics.as_ref().map(|m| summary_of(m, group));
+            let summary = run.metrics.as_ref().map(|m| m.group_summary(group));
             let _ = writeln!(out, "| {} | {} |", axes(&run.job), cells(summary.as_ref()));
         }
         out.push('\n');
@@ -74,14 +69,14 @@ pub fn render(name: &str, runs: &[SweepRun], tables: Tables) -> String {
         "| class | scene | noise | mode | schedule | seed | objects | missing | Acc. [cm] | Comp. [cm] | C.R. <5cm [%] | C.R. <1cm [%] |\n",
     );
     out.push_str("|---|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
-    let classes: BTreeMap<&str, ()> = runs
+    let classes: BTreeSet<&str> = runs
         .iter()
         .filter_map(|r| r.metrics.as_ref())
-        .flat_map(|m| m.classes.keys().map(|k| (k.as_str(), ())))
+        .flat_map(|m| m.classes.keys().map(String::as_str))
         .collect();
-    for class in classes.keys() {
+    for class in classes {
         for run in runs {
-            if let Some(summary) = run.metrics.as_ref().and_then(|m| m.classes.get(*class)) {
+            if let Some(summary) = run.metrics.as_ref().and_then(|m| m.classes.get(class)) {
                 let _ = writeln!(out, "| {class} | {} | {} |", axes(&run.job), cells(Some(summary)));
             }
         }
@@ -132,16 +127,6 @@ fn cells(summary: Option<&MetricSummary>) -> String {
         s.completion_ratio_5cm_pct,
         s.completion_ratio_1cm_pct
     )
-}
-
-/// A group's summary: every object, or those whose class has more (or no more) than one.
-fn summary_of(report: &EvaluationReport, group: Group) -> MetricSummary {
-    let repeated = |class: &str| report.classes.get(class).is_some_and(|c| c.objects > 1);
-    match group {
-        Group::All => report.mean,
-        Group::Repeated => MetricSummary::of(report.objects.iter().filter(|o| repeated(&o.class_name))),
-        Group::Unique => MetricSummary::of(report.objects.iter().filter(|o| !repeated(&o.class_name))),
-    }
 }
 
 #[cfg(test)]
